@@ -1,0 +1,39 @@
+# Arco: two commands get you going -- `make demo` and `make test`.
+PYTHON ?= python3.11
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+NPROC := $(shell nproc 2>/dev/null || echo 2)
+
+.PHONY: demo test bench lint venv clean
+
+venv: $(STAMP)
+
+$(STAMP): pyproject.toml
+	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "need $(PYTHON)"; exit 1; }
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/arco demo -o out
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q -n $(NPROC) --dist loadfile
+
+lint: $(STAMP)
+	$(BIN)/ruff check .
+
+bench: $(STAMP) stk
+	$(BIN)/python bench/synth_speed.py --json
+
+# STK's Bowed waveguide is the speed peer of bench/synth_speed.py (Debian's libstk-dev).
+stk:
+	@if ! ls /usr/include/stk/Bowed.h >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq libstk-dev g++ >/dev/null; \
+	  else sudo apt-get update -qq && sudo apt-get install -y -qq libstk-dev g++ >/dev/null; fi; \
+	fi
+
+clean:
+	rm -rf $(VENV) out .pytest_cache .ruff_cache

@@ -1,0 +1,32 @@
+"""Arrow schemas, validation and atomic read/write helpers for every table Arco exchanges."""
+
+from data_schemas.actions import (
+    ACTIONS,
+    ACTIONS_VERSION,
+    empty_actions,
+    read_actions,
+    validate_actions,
+    write_actions,
+)
+from data_schemas.errors import ArcoError, ParameterError, SchemaError
+from data_schemas.io import atomic_path, read_frame, read_table, write_table
+from data_schemas.spec import Column, TableSpec, non_decreasing
+
+__all__ = [
+    "ACTIONS",
+    "ACTIONS_VERSION",
+    "ArcoError",
+    "Column",
+    "ParameterError",
+    "SchemaError",
+    "TableSpec",
+    "atomic_path",
+    "empty_actions",
+    "non_decreasing",
+    "read_actions",
+    "read_frame",
+    "read_table",
+    "validate_actions",
+    "write_actions",
+    "write_table",
+]

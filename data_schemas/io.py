@@ -1,0 +1,139 @@
+"""Read and write schema-checked tables as Parquet or CSV, atomically.
+
+Writes go to a temporary file in the target directory and are renamed into place, so a
+crash never leaves a half-written file where a good one was.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable
+from contextlib import contextmanager
+from pathlib import Path
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.csv as pacsv
+import pyarrow.parquet as pq
+
+from data_schemas.errors import SchemaError
+from data_schemas.spec import TableSpec
+
+TableLike = pa.Table | pd.DataFrame
+
+
+@contextmanager
+def atomic_path(path: str | os.PathLike):
+    """Yield a temporary path next to ``path``; rename it onto ``path`` on success.
+
+    Examples
+    --------
+    >>> with atomic_path("out.bin") as tmp:  # doctest: +SKIP
+    ...     Path(tmp).write_bytes(b"...")
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def to_arrow(table: TableLike) -> pa.Table:
+    """Convert a DataFrame (or pass through an Arrow table) without the pandas index."""
+    if isinstance(table, pd.DataFrame):
+        return pa.Table.from_pandas(table, preserve_index=False)
+    return table
+
+
+def write_table(table: TableLike, path: str | os.PathLike, spec: TableSpec) -> Path:
+    """Validate ``table`` against ``spec`` and write it atomically (Parquet or CSV by suffix).
+
+    Parameters
+    ----------
+    table : pyarrow.Table or pandas.DataFrame
+        The rows to write.
+    path : path-like
+        Target ``.parquet`` or ``.csv`` file.
+    spec : TableSpec
+        The table's declaration.
+
+    Returns
+    -------
+    pathlib.Path
+        The written path.
+    """
+    path = Path(path)
+    writer = _writer_for(path)
+    arrow = spec.conform(to_arrow(table), source=f"{path} (being written)")
+    with atomic_path(path) as tmp:
+        writer(arrow, tmp)
+    return path
+
+
+def read_table(path: str | os.PathLike, spec: TableSpec) -> pa.Table:
+    """Read a Parquet or CSV file and validate it against ``spec``.
+
+    Raises
+    ------
+    SchemaError
+        If the file is missing, unreadable, of another table or schema version, or any value
+        breaks the schema; the message names the file, the column and the row.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise SchemaError("file not found", source=str(path))
+    suffix = path.suffix.lower()
+    try:
+        if suffix in (".parquet", ".pq"):
+            table = pq.read_table(path)
+            _check_version(table.schema, spec, str(path))
+        elif suffix == ".csv":
+            table = pacsv.read_csv(path)
+        else:
+            raise SchemaError(f"unsupported file type '{suffix}' (use .parquet or .csv)",
+                              source=str(path))
+    except (pa.ArrowInvalid, OSError) as exc:
+        raise SchemaError(f"cannot read: {str(exc).splitlines()[0]}", source=str(path)) from None
+    return spec.conform(table, source=str(path))
+
+
+def read_frame(path: str | os.PathLike, spec: TableSpec) -> pd.DataFrame:
+    """Read and validate like :func:`read_table`, returning a DataFrame."""
+    return read_table(path, spec).to_pandas()
+
+
+def _check_version(schema: pa.Schema, spec: TableSpec, source: str) -> None:
+    meta = schema.metadata or {}
+    name = meta.get(b"arco_table", b"").decode()
+    version = meta.get(b"arco_schema_version", b"").decode()
+    if name and name != spec.name:
+        raise SchemaError(f"holds table '{name}', expected '{spec.name}'", source=source)
+    if version and version.split(".")[0] != spec.version.split(".")[0]:
+        raise SchemaError(
+            f"schema version {version} of table '{spec.name}' is incompatible with this "
+            f"Arco's version {spec.version}",
+            source=source,
+        )
+
+
+def _write_parquet(table: pa.Table, path: Path) -> None:
+    pq.write_table(table, path, compression="zstd")
+
+
+def _write_csv(table: pa.Table, path: Path) -> None:
+    pacsv.write_csv(table, path)
+
+
+def _writer_for(path: Path) -> Callable[[pa.Table, Path], None]:
+    suffix = path.suffix.lower()
+    if suffix in (".parquet", ".pq"):
+        return _write_parquet
+    if suffix == ".csv":
+        return _write_csv
+    raise SchemaError(f"unsupported file type '{suffix}' (use .parquet or .csv)", source=str(path))

@@ -1,0 +1,1 @@
+"""Sub-commands of the arco CLI, one module each."""
