@@ -10,6 +10,14 @@ from data_schemas.actions import (
 )
 from data_schemas.errors import ArcoError, ParameterError, SchemaError
 from data_schemas.io import atomic_path, read_frame, read_table, write_table
+from data_schemas.notes import (
+    NOTES,
+    NOTES_VERSION,
+    empty_notes,
+    read_notes,
+    validate_notes,
+    write_notes,
+)
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
 __all__ = [
@@ -17,16 +25,22 @@ __all__ = [
     "ACTIONS_VERSION",
     "ArcoError",
     "Column",
+    "NOTES",
+    "NOTES_VERSION",
     "ParameterError",
     "SchemaError",
     "TableSpec",
     "atomic_path",
     "empty_actions",
+    "empty_notes",
     "non_decreasing",
     "read_actions",
     "read_frame",
+    "read_notes",
     "read_table",
     "validate_actions",
+    "validate_notes",
     "write_actions",
+    "write_notes",
     "write_table",
 ]
