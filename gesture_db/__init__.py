@@ -1,0 +1,1 @@
+"""Gesture database: simulated and imported recordings, segmentation, contours, features."""

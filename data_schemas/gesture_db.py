@@ -1,0 +1,171 @@
+"""Tables of the gesture database: notes, contours, group models and the manifest.
+
+A database directory holds
+
+- ``manifest.json``: schema version, generation, build parameters, the hashes of the
+  source recordings and the list of files that make up the committed generation;
+- ``notes/gen-<g>/group=<group>/part.parquet``: :data:`DB_NOTES`, one row per segmented note;
+- ``contours/group=<group>/src-<hash>.parquet``: :data:`DB_CONTOURS`, the segmented signals;
+- ``models/gen-<g>.parquet``: :data:`DB_GROUP_MODELS`, one row per note group.
+
+Only files listed in the manifest belong to the database; the manifest is replaced
+atomically, so a crashed build leaves the previous generation readable.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+
+from data_schemas.errors import SchemaError
+from data_schemas.io import atomic_path
+from data_schemas.spec import Column, TableSpec
+
+GESTURE_DB_VERSION = "1.0"
+
+_LIST = pa.list_(pa.float64())
+
+DB_NOTES = TableSpec(
+    name="gesture_db_notes",
+    version=GESTURE_DB_VERSION,
+    description="Segmented notes of the gesture database with their Bezier contour "
+                "parameters and PCA features, one row per note.",
+    columns=(
+        Column("note_id", pa.string(), "", "Unique note key '<source hash>:<take>:<index>'."),
+        Column("recording_id", pa.string(), "", "Take the note comes from."),
+        Column("note_index", pa.int32(), "1", "Index of the note within its take.", minimum=0),
+        Column("source_hash", pa.string(), "", "SHA-256 (first 16 hex digits) of the source."),
+        Column("source_path", pa.string(), "", "Path of the source recording when built."),
+        Column("group", pa.string(), "",
+               "Note group: technique-direction-slur position-run position."),
+        Column("technique", pa.string(), "", "Bowing technique."),
+        Column("bow_direction", pa.string(), "", "Bow direction, 'down' or 'up'."),
+        Column("slur_position", pa.string(), "", "Position in a slur."),
+        Column("run_position", pa.string(), "", "Position in a run without rests."),
+        Column("onset", pa.float64(), "s", "Segmented onset in the take.", minimum=0.0),
+        Column("offset", pa.float64(), "s", "Segmented offset in the take.", minimum=0.0),
+        Column("duration", pa.float64(), "s", "offset - onset.", minimum=0.0,
+               exclusive_minimum=True),
+        Column("midi_pitch", pa.int16(), "1", "MIDI note number.", minimum=0, maximum=127),
+        Column("string", pa.int8(), "1", "String index, 0 = lowest.", minimum=0, maximum=3),
+        Column("effective_string_length", pa.float64(), "m",
+               "Vibrating length from finger to bridge.", minimum=0.0, exclusive_minimum=True),
+        Column("dynamic", pa.float32(), "1", "Dynamic level, 0 = pppp, 5 = mf, 9 = ffff.",
+               minimum=0.0, maximum=9.0),
+        Column("params", _LIST, "mixed",
+               "Bezier contour vector p (per parameter: segment duration shares, segment "
+               "end values in the parameter's unit, handle ratios in [0, 1])."),
+        Column("features", _LIST, "1", "PCA feature vector f of the note's group.",
+               nullable=True, required=False),
+        Column("fit_rms_velocity", pa.float64(), "m/s", "RMS error of the Bezier velocity.",
+               minimum=0.0),
+        Column("fit_rms_force", pa.float64(), "N", "RMS error of the Bezier force.",
+               minimum=0.0),
+        Column("fit_rms_beta", pa.float64(), "1", "RMS error of the Bezier beta.", minimum=0.0),
+        Column("true_onset", pa.float64(), "s", "Ground-truth onset when known.",
+               nullable=True, required=False),
+        Column("true_offset", pa.float64(), "s", "Ground-truth offset when known.",
+               nullable=True, required=False),
+    ),
+)
+
+DB_CONTOURS = TableSpec(
+    name="gesture_db_contours",
+    version=GESTURE_DB_VERSION,
+    description="Segmented bowing signals of each database note, one row per frame.",
+    columns=(
+        Column("note_id", pa.string(), "", "Key of the note in the notes table."),
+        Column("time", pa.float64(), "s", "Time from the note's segmented onset."),
+        Column("bow_velocity", pa.float64(), "m/s", "Bow velocity (+ = down-bow)."),
+        Column("bow_force", pa.float64(), "N", "Bow force.", minimum=0.0),
+        Column("beta", pa.float64(), "1", "Relative bow-bridge distance."),
+        Column("bow_position", pa.float64(), "1", "Contact point along the bow, 0 = frog."),
+        Column("finger_ratio", pa.float32(), "1", "Finger ratio."),
+    ),
+)
+
+DB_GROUP_MODELS = TableSpec(
+    name="gesture_db_group_models",
+    version=GESTURE_DB_VERSION,
+    description="Per note group: contour grammar, PCA basis and the Gaussian of features.",
+    columns=(
+        Column("group", pa.string(), "", "Note group."),
+        Column("n_notes", pa.int32(), "1", "Notes in the group.", minimum=0),
+        Column("grammar", pa.string(), "",
+               "JSON: per parameter the number of cubic segments and slope constraints."),
+        Column("param_dim", pa.int16(), "1", "Length of the contour vector p.", minimum=0),
+        Column("feature_dim", pa.int16(), "1", "Length of the feature vector f.", minimum=0),
+        Column("param_mean", _LIST, "mixed", "Mean of p over the group."),
+        Column("param_scale", _LIST, "mixed", "Standard deviation of p (floored) used to "
+               "standardise p before PCA."),
+        Column("components", _LIST, "1",
+               "PCA basis, shape (feature_dim, param_dim), row-major."),
+        Column("explained_variance_ratio", _LIST, "1", "Share of variance per component."),
+        Column("feature_mean", _LIST, "1", "Mean of f."),
+        Column("feature_cov", _LIST, "1",
+               "Regularised covariance of f, shape (feature_dim, feature_dim), row-major."),
+        Column("shrinkage", pa.float64(), "1", "Shrinkage towards a scaled identity.",
+               minimum=0.0, maximum=1.0),
+        Column("rms_velocity", pa.float64(), "m/s", "Mean Bezier RMS error of velocity."),
+        Column("rms_force", pa.float64(), "N", "Mean Bezier RMS error of force."),
+        Column("rms_beta", pa.float64(), "1", "Mean Bezier RMS error of beta."),
+    ),
+)
+
+MANIFEST_NAME = "manifest.json"
+
+
+def write_manifest(manifest: dict[str, Any], db_dir: str | os.PathLike) -> Path:
+    """Write ``manifest.json`` atomically (the commit point of a database build).
+
+    Parameters
+    ----------
+    manifest : dict
+        JSON-serialisable manifest; ``schema_version`` is set to :data:`GESTURE_DB_VERSION`.
+    db_dir : path-like
+        Database directory.
+    """
+    path = Path(db_dir) / MANIFEST_NAME
+    body = {"arco_table": "gesture_db_manifest", **manifest,
+            "schema_version": GESTURE_DB_VERSION}
+    with atomic_path(path) as tmp:
+        with open(tmp, "w") as fh:
+            json.dump(body, fh, indent=1, sort_keys=True)
+            fh.flush()
+            os.fsync(fh.fileno())
+    return path
+
+
+def read_manifest(db_dir: str | os.PathLike) -> dict[str, Any]:
+    """Read and check the manifest of a database directory.
+
+    Raises
+    ------
+    SchemaError
+        If the manifest is missing, not JSON, not a gesture-database manifest, or of an
+        incompatible schema version.
+    """
+    path = Path(db_dir) / MANIFEST_NAME
+    if not path.exists():
+        raise SchemaError("no gesture database here (manifest.json missing)", source=str(path))
+    try:
+        manifest = json.loads(path.read_text())
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise SchemaError(f"manifest is not valid JSON ({exc})", source=str(path)) from None
+    if not isinstance(manifest, dict) or manifest.get("arco_table") != "gesture_db_manifest":
+        raise SchemaError("not a gesture database manifest", source=str(path))
+    version = str(manifest.get("schema_version", ""))
+    if version.split(".")[0] != GESTURE_DB_VERSION.split(".")[0]:
+        raise SchemaError(
+            f"schema version {version or '(none)'} of the gesture database is incompatible "
+            f"with this Arco's version {GESTURE_DB_VERSION}; rebuild it with arco build-db",
+            source=str(path), column="schema_version")
+    return manifest
+
+
+__all__ = ["DB_CONTOURS", "DB_GROUP_MODELS", "DB_NOTES", "GESTURE_DB_VERSION", "MANIFEST_NAME",
+           "read_manifest", "write_manifest"]

@@ -1,0 +1,104 @@
+"""The recording table: continuous bowing signals of one or more takes.
+
+One row is one motion-capture frame of one take (``recording_id``). Recordings come from the
+simulated performer (:mod:`gesture_db.simulate`), from importers of real motion-capture
+exports, or from the actions table of any render. Frames are sampled at a constant rate of
+200-240 Hz (like motion-capture systems); the rate is written in the file metadata under
+``frame_rate_hz`` and the default is :data:`RECORDING_FRAME_RATE`.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pandas as pd
+import pyarrow as pa
+
+from data_schemas.io import read_frame, to_arrow, write_table
+from data_schemas.spec import Column, TableSpec, non_decreasing
+
+RECORDING_VERSION = "1.0"
+
+#: Default frame rate of recordings (Hz); any constant rate of 200-240 Hz is accepted.
+RECORDING_FRAME_RATE = 240.0
+
+#: Violin bow hair length (m) used to turn bow position into a distance.
+BOW_LENGTH = 0.65
+
+RECORDING = TableSpec(
+    name="recording",
+    version=RECORDING_VERSION,
+    description=(
+        "Continuous bowing signals, one row per frame of one take, sampled at a constant "
+        "200-240 Hz (metadata key frame_rate_hz)."
+    ),
+    columns=(
+        Column("recording_id", pa.string(), "", "Identifier of the take the frame belongs to."),
+        Column("time", pa.float64(), "s", "Frame time from the start of the take.", minimum=0.0),
+        Column("bow_velocity", pa.float64(), "m/s",
+               "Bow velocity across the string, + = down-bow, - = up-bow.",
+               minimum=-5.0, maximum=5.0),
+        Column("bow_force", pa.float64(), "N", "Normal force of the bow on the string "
+               "(0 = bow off the string).", minimum=0.0, maximum=20.0),
+        Column("beta", pa.float64(), "1",
+               "Bow-bridge distance divided by the effective (bridge to finger) string length.",
+               minimum=0.0, maximum=0.5, exclusive_minimum=True, exclusive_maximum=True),
+        Column("bow_position", pa.float64(), "1",
+               "Contact point along the bow hair, 0 = frog, 1 = tip.", minimum=0.0, maximum=1.0),
+        Column("string", pa.int8(), "1", "String index, 0 = lowest string.", minimum=0,
+               maximum=3),
+        Column("finger_ratio", pa.float32(), "1",
+               "Fraction of the string length removed by the finger, 1 - 2**(-semitones/12).",
+               minimum=0.0, maximum=0.8),
+    ),
+    checks=(non_decreasing("time", within="recording_id"),),
+    extra_metadata={"frame_rate_hz": repr(RECORDING_FRAME_RATE)},
+)
+
+
+def validate_recording(recording: pd.DataFrame | pa.Table,
+                       source: str = "<recording>") -> pd.DataFrame:
+    """Validate an in-memory recording and return it with canonical dtypes.
+
+    Parameters
+    ----------
+    recording : pandas.DataFrame or pyarrow.Table
+        Frames with the columns of :data:`RECORDING`.
+    source : str
+        Name used in error messages.
+
+    Raises
+    ------
+    SchemaError
+        Naming the source, column and first bad row.
+    """
+    return RECORDING.conform(to_arrow(recording), source=source).to_pandas()
+
+
+def write_recording(recording: pd.DataFrame | pa.Table, path: str | os.PathLike) -> Path:
+    """Validate and write a recording (``.parquet`` or ``.csv``) atomically."""
+    return write_table(recording, path, RECORDING)
+
+
+def read_recording(path: str | os.PathLike) -> pd.DataFrame:
+    """Read and validate a recording from ``.parquet`` or ``.csv``."""
+    return read_frame(path, RECORDING)
+
+
+def frame_rate(recording: pd.DataFrame) -> float:
+    """Estimate the frame rate (Hz) of a recording from its median frame step.
+
+    Parameters
+    ----------
+    recording : pandas.DataFrame
+        Frames of a single take, sorted by time.
+    """
+    t = recording["time"].to_numpy()
+    if t.size < 2:
+        return RECORDING_FRAME_RATE
+    return float(1.0 / pd.Series(t).diff().median())
+
+
+__all__ = ["BOW_LENGTH", "RECORDING", "RECORDING_FRAME_RATE", "RECORDING_VERSION",
+           "frame_rate", "read_recording", "validate_recording", "write_recording"]
