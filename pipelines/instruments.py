@@ -7,7 +7,6 @@ semitones above the open string; the actions table wants ``finger_ratio = 1 - 2*
 from __future__ import annotations
 
 import re
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -238,11 +237,6 @@ def choose_strings(notes: pd.DataFrame, instrument: Instrument, *,
             used = _distinct_strings(pitch[order], opens)
             string[order] = used
             fixed[order] = True
-        if rolled.any():
-            warnings.warn(
-                f"{notes['source_file'].iloc[0]}: part {notes['part_name'].iloc[0]!r}: "
-                f"{int(rolled.sum())} chord notes cannot be bowed together and are rolled",
-                stacklevel=2)
 
     slur = notes["slur_id"].to_numpy(dtype=np.float64, na_value=np.nan)
     for sid in np.unique(slur[np.isfinite(slur)]):

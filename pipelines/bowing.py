@@ -1,0 +1,370 @@
+"""Bowing: events -> strokes with planned velocity and bow position -> control frames.
+
+A stroke is a run of events played in one bow direction without a bow change (a slur, or a
+single detached note). Its bow speed follows the dynamics, starts and ends at rest, and never
+changes faster than the maximum bow acceleration. The bow-length budget: each stroke's travel
+is computed before it is played; a stroke that would run off the bow is slowed down, and a
+stroke followed without a pause by a longer one travels further (faster, within a limit) so
+that the next one fits. ``bow_position`` therefore stays inside [0, 1] by construction.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from pipelines.instruments import finger_ratio
+from pipelines.rules import Event
+from pipelines.rules_config import dynamic_table
+
+_COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
+            "bow_position", "pluck")
+_TICK = 0.0005  # s between a frame and its neighbour that changes finger or lifts the bow
+
+
+@dataclass
+class Stroke:
+    """One bow stroke: event indices, direction (+1 down, -1 up), and its planned shape.
+
+    ``t`` (s), ``speed`` (m/s, unsigned) and ``position`` (0 frog .. 1 tip) are arrays of the
+    same shape; ``force_scale`` scales the force with the planned speed change.
+    """
+
+    events: list[int]
+    direction: int
+    t: np.ndarray
+    speed: np.ndarray
+    position: np.ndarray
+    travel: float
+    force_scale: float = 1.0
+    speed_scale: float = 1.0
+
+    @property
+    def start(self) -> float:
+        """Start time (s)."""
+        return float(self.t[0])
+
+    @property
+    def stop(self) -> float:
+        """End time (s)."""
+        return float(self.t[-1])
+
+
+def limit_acceleration(t: np.ndarray, speed: np.ndarray, max_acceleration: float) -> np.ndarray:
+    """Lower a speed curve until no segment changes faster than ``max_acceleration``.
+
+    Parameters
+    ----------
+    t : np.ndarray [shape=(n,)], s
+        Increasing times.
+    speed : np.ndarray [shape=(n,)], m/s
+        Target speeds (>= 0); the result is pointwise <= the target.
+    max_acceleration : float, m/s^2
+        Largest allowed change of speed per second.
+
+    Returns
+    -------
+    np.ndarray [shape=(n,)], m/s
+    """
+    v = speed.astype(np.float64).tolist()
+    dv = (np.diff(t) * max_acceleration).tolist()
+    n = len(v)
+    for k in range(1, n):
+        cap = v[k - 1] + dv[k - 1]
+        if v[k] > cap:
+            v[k] = cap
+    for k in range(n - 2, -1, -1):
+        cap = v[k + 1] + dv[k]
+        if v[k] > cap:
+            v[k] = cap
+    return np.asarray(v)
+
+
+def _dynamic_at(e: Event, t: np.ndarray) -> np.ndarray:
+    if e.dynamic_next is None or not np.isfinite(e.next_t0):
+        return np.full(t.shape, e.dynamic)
+    frac = np.clip((t - e.t0) / max(e.next_t0 - e.t0, 1e-6), 0.0, 1.0)
+    return e.dynamic + (e.dynamic_next - e.dynamic) * frac
+
+
+def _stroke_grid(events: list[Event], idx: list[int], dt: float) -> np.ndarray:
+    t0, t1 = events[idx[0]].t0, events[idx[-1]].played_end
+    points = [np.arange(t0, t1, dt), [t1]]
+    for k in idx:
+        points.append([events[k].t0, min(events[k].played_end, t1)])
+    grid = np.unique(np.concatenate(points))
+    return grid[(grid >= t0) & (grid <= t1)]
+
+
+def _target_speed(events: list[Event], idx: list[int], t: np.ndarray,
+                  config: dict[str, Any]) -> np.ndarray:
+    starts = np.array([events[k].t0 for k in idx])
+    which = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(idx) - 1)
+    target = np.zeros(t.shape)
+    for j, k in enumerate(idx):
+        e = events[k]
+        mask = (which == j) & (t < e.played_end)
+        target[mask] = dynamic_table(config, "velocity", _dynamic_at(e, t[mask]))
+    target[0] = 0.0
+    target[-1] = 0.0
+    return target
+
+
+def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
+         warnings: list[str] | None = None) -> list[Stroke]:
+    """Group bowed events into strokes and plan their speed and bow position.
+
+    Parameters
+    ----------
+    events : list of Event
+        Events of one part (pizzicato events are skipped).
+    config : dict
+        Rules configuration.
+    bow_length : float, m
+        Usable bow hair.
+    warnings : list of str, optional
+        Receives a note when strokes had to be slowed below ``bow.min_speed_scale``.
+
+    Returns
+    -------
+    list of Stroke
+    """
+    bow = config["bow"]
+    dt = config["frames"]["interval"]
+    amax = bow["max_acceleration"]
+    margin = bow["margin"]
+    groups: list[list[int]] = []
+    for k, e in enumerate(events):
+        if e.pizz:
+            continue
+        if groups and e.cont and events[groups[-1][-1]].direction == e.direction and \
+                groups[-1][-1] == k - 1:
+            groups[-1].append(k)
+        else:
+            groups.append([k])
+    strokes = []
+    for idx in groups:
+        t = _stroke_grid(events, idx, dt)
+        speed = limit_acceleration(t, _target_speed(events, idx, t, config), amax)
+        travel = float(np.trapezoid(speed, t)) / bow_length
+        strokes.append(Stroke(idx, events[idx[0]].direction, t, speed, np.zeros_like(t),
+                              travel))
+    regions = config["bow_regions"]
+    position: float | None = None
+    squeezed = 0
+    for i, s in enumerate(strokes):
+        first = events[s.events[0]]
+        d = s.direction
+        retake = i == 0 or _retake(strokes[i - 1], s, first, bow["retake_gap"])
+        if position is None:
+            position = margin if d > 0 else 1.0 - margin
+        if first.region is not None:
+            centre = regions[first.region]
+            position = float(np.clip(centre - d * s.travel / 2, margin, 1.0 - margin))
+        elif retake:
+            position = _fit_start(position, s.travel, d, margin)
+        avail = (1.0 - margin - position) if d > 0 else (position - margin)
+        scale = 1.0
+        if i + 1 < len(strokes) and s.travel > 0:
+            nxt = strokes[i + 1]
+            nfirst = events[nxt.events[0]]
+            if not _retake(s, nxt, nfirst, bow["retake_gap"]) and nfirst.region is None:
+                end = position + d * s.travel
+                avail_next = (1.0 - margin - end) if nxt.direction > 0 else (end - margin)
+                if nxt.travel > avail_next:
+                    scale = min(bow["max_speed_scale"],
+                                (s.travel + nxt.travel - avail_next) / s.travel)
+        if s.travel * scale > avail:
+            scale = max(avail, 0.0) / s.travel
+        if scale != 1.0:
+            s.speed = limit_acceleration(s.t, s.speed * scale, amax)
+            s.speed_scale = scale
+            s.force_scale = float(np.sqrt(np.clip(scale, 0.1, 2.0)))
+            if scale < bow["min_speed_scale"]:
+                squeezed += 1
+        run = np.concatenate([[0.0], np.cumsum(np.diff(s.t) * (s.speed[1:] + s.speed[:-1]) / 2)])
+        s.position = np.clip(position + d * run / bow_length, 0.0, 1.0)
+        s.travel = float(run[-1] / bow_length)
+        position = float(s.position[-1])
+    if squeezed and warnings is not None:
+        warnings.append(f"{squeezed} strokes were slowed below "
+                        f"{bow['min_speed_scale']:.2f} x their speed to fit the bow")
+    return strokes
+
+
+def _retake(prev: Stroke, s: Stroke, first: Event, gap: float) -> bool:
+    """Whether the bow may be lifted and re-placed between two strokes."""
+    return (first.t0 - prev.stop) >= gap or prev.direction == s.direction
+
+
+def _fit_start(position: float, travel: float, direction: int, margin: float) -> float:
+    """Move the starting point (during a retake) just enough for the stroke to fit."""
+    if direction > 0:
+        return min(position, max(margin, 1.0 - margin - travel))
+    return max(position, min(1.0 - margin, margin + travel))
+
+
+def _force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float) -> np.ndarray:
+    art = config["articulations"]
+    tech = config["techniques"]
+    force = dynamic_table(config, "force", _dynamic_at(e, t)) * scale
+    if e.technique == "col_legno":
+        force = force * tech["col_legno_force"]
+    if len(e.strings) > 1:
+        force = force * art["double_stop_force"]
+    if e.accent != 1.0:
+        decay = np.clip(1.0 - (t - e.t0) / art["accent_time"], 0.0, 1.0)
+        force = force * (1.0 + (e.accent - 1.0) * decay)
+    lt = art["lighten_time"]
+    tail = np.clip((np.minimum(t, e.played_end) - (e.played_end - lt)) / lt, 0.0, 1.0)
+    if e.breath:
+        force = force * (1.0 - (1.0 - art["breath_force"]) * tail)
+    elif e.lighten:
+        force = force * (1.0 - (1.0 - art["lighten_force"]) * tail)
+    return force
+
+
+def _beta(e: Event, t: np.ndarray, config: dict[str, Any]) -> np.ndarray:
+    beta = dynamic_table(config, "beta", _dynamic_at(e, t))
+    if e.technique == "sul_ponticello":
+        beta = beta * config["techniques"]["sul_ponticello_beta"]
+    elif e.technique == "sul_tasto":
+        beta = beta * config["techniques"]["sul_tasto_beta"]
+    return np.clip(beta, 0.02, 0.45)
+
+
+def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *,
+           force_scale: float = 1.0) -> pd.DataFrame:
+    """Render planned strokes (and plucks) as control frames of the actions table.
+
+    Parameters
+    ----------
+    events : list of Event
+        Events of one part.
+    strokes : list of Stroke
+        :func:`plan` output for ``events``.
+    config : dict
+        Rules configuration.
+    force_scale : float
+        Instrument force factor (viola, cello bow harder).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Actions table rows sorted by time (not yet validated).
+    """
+    rows: list[dict[str, np.ndarray]] = []
+    roll_time = config["articulations"]["roll_time"]
+    for s in strokes:
+        last = s.events[-1]
+        for j, k in enumerate(s.events):
+            e = events[k]
+            seg_end = events[s.events[j + 1]].t0 if k != last else s.stop
+            inside = (s.t >= e.t0) & ((s.t < seg_end) if k != last else (s.t <= seg_end))
+            t = s.t[inside]
+            if k != last and seg_end - _TICK > (t[-1] if t.size else e.t0):
+                t = np.append(t, seg_end - _TICK)
+            speed = np.interp(t, s.t, s.speed)
+            pos = np.interp(t, s.t, s.position)
+            force = _force(e, t, config, force_scale * s.force_scale)
+            beta = _beta(e, t, config)
+            n_roll = len(e.roll)
+            sustain_from = e.t0 + n_roll * roll_time
+            for j_roll, (string, semis) in enumerate(e.roll):
+                a, b = e.t0 + j_roll * roll_time, e.t0 + (j_roll + 1) * roll_time
+                m = (t >= a) & (t < b)
+                if m.any():
+                    rows.append(_rows(t[m], string, semis, force[m], s.direction * speed[m],
+                                      beta[m], pos[m]))
+                    rows.append(_lift(b, string, semis, beta[m][-1], pos[m][-1]))
+            m = t >= sustain_from if n_roll else np.ones(t.shape, bool)
+            for string, semis in zip(e.strings, e.semitones, strict=True):
+                rows.append(_rows(t[m], string, semis, force[m], s.direction * speed[m],
+                                  beta[m], pos[m]))
+            if k == last:
+                rows.extend(_after_stroke(events, k, t, force, beta, pos))
+    for e in events:
+        if e.pizz:
+            rows.extend(_pluck(e, config))
+    rows = [r for r in rows if len(r["time"])]
+    if not rows:
+        return pd.DataFrame({c: np.zeros(0) for c in _COLUMNS})
+    table = pd.DataFrame({c: np.concatenate([r[c] for r in rows]) for c in _COLUMNS})
+    table = _prepare_attacks(table)
+    return table.sort_values("time", kind="stable").reset_index(drop=True)[list(_COLUMNS)]
+
+
+def _rows(t: np.ndarray, string: int, semis: float, force: np.ndarray, velocity: np.ndarray,
+          beta: np.ndarray, pos: np.ndarray, pluck: bool = False) -> dict[str, np.ndarray]:
+    n = t.size
+    return {"time": t, "string": np.full(n, string, np.int8),
+            "finger_ratio": np.full(n, finger_ratio(semis), np.float32),
+            "bow_force": np.maximum(force, 0.0), "bow_velocity": velocity, "beta": beta,
+            "bow_position": pos, "pluck": np.full(n, pluck)}
+
+
+def _lift(t: float, string: int, semis: float, beta: float, pos: float) -> dict[str, np.ndarray]:
+    return _rows(np.array([t]), string, semis, np.zeros(1), np.zeros(1), np.array([beta]),
+                 np.array([pos]))
+
+
+def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: np.ndarray,
+                  beta: np.ndarray, pos: np.ndarray) -> list[dict[str, np.ndarray]]:
+    """After a stroke: lift the bow (rest, string change) or keep it resting on the string."""
+    e = events[k]
+    if not t.size:
+        return []
+    nxt = events[k + 1] if k + 1 < len(events) else None
+    end = t[-1]
+    out = []
+    same = nxt is not None and not nxt.pizz and set(nxt.strings) == set(e.strings)
+    for string, semis in zip(e.strings, e.semitones, strict=True):
+        if same and not e.rest_after:
+            if nxt.t0 - _TICK > end + _TICK:
+                out.append(_rows(np.array([nxt.t0 - _TICK]), string, semis, force[-1:],
+                                 np.zeros(1), beta[-1:], pos[-1:]))
+            continue
+        lift = end + _TICK
+        if nxt is not None and string in nxt.strings and lift >= nxt.t0 - _TICK:
+            continue
+        out.append(_lift(lift, string, semis, float(beta[-1]), float(pos[-1])))
+    return out
+
+
+def _pluck(e: Event, config: dict[str, Any]) -> list[dict[str, np.ndarray]]:
+    beta = float(_beta(e, np.array([e.t0]), config)[0])
+    out = []
+    members = [*e.roll, *zip(e.strings, e.semitones, strict=True)]
+    for j, (string, semis) in enumerate(members):
+        t = e.t0 + 0.01 * j
+        out.append(_rows(np.array([t]), string, semis, np.zeros(1), np.zeros(1),
+                         np.array([beta]), np.array([0.5]), pluck=True))
+        if e.end - _TICK > t + _TICK:
+            out.append(_rows(np.array([e.end - _TICK]), string, semis, np.zeros(1), np.zeros(1),
+                             np.array([beta]), np.array([0.5])))
+    return out
+
+
+def _prepare_attacks(table: pd.DataFrame) -> pd.DataFrame:
+    """Before a string is bowed again after silence, add a lifted frame 1 ms earlier.
+
+    The instrument interpolates between rows of a string; without this frame the force and
+    finger would creep from the last (lifted) row to the next attack over the whole rest.
+    """
+    table = table.sort_values(["string", "time"], kind="stable").reset_index(drop=True)
+    t = table["time"].to_numpy()
+    s = table["string"].to_numpy()
+    f = table["bow_force"].to_numpy()
+    gap = np.flatnonzero((s[1:] == s[:-1]) & (t[1:] - t[:-1] > 0.002) & (f[:-1] == 0.0)) + 1
+    if gap.size == 0:
+        return table
+    pre = table.iloc[gap - 1].copy()
+    pre["time"] = t[gap] - 0.001
+    pre["bow_force"] = 0.0
+    pre["bow_velocity"] = 0.0
+    pre["pluck"] = False
+    pre["bow_position"] = table["bow_position"].to_numpy()[gap]
+    return pd.concat([table, pre], ignore_index=True)
