@@ -286,6 +286,12 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                                   beta[m], pos[m]))
             if k == last:
                 rows.extend(_after_stroke(events, k, t, force, beta, pos))
+            elif t.size:
+                nxt = events[s.events[j + 1]]
+                for string, semis in zip(e.strings, e.semitones, strict=True):
+                    if string not in nxt.strings:  # string crossing inside a slur
+                        rows.append(_lift(seg_end, string, semis, float(beta[-1]),
+                                          float(pos[-1])))
     for e in events:
         if e.pizz:
             rows.extend(_pluck(e, config))

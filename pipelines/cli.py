@@ -18,6 +18,8 @@ from data_schemas.errors import ArcoError
 COMMAND_MODULES = (
     "pipelines.commands.synth",
     "pipelines.commands.demo",
+    "pipelines.commands.notes",
+    "pipelines.commands.render",
 )
 
 EXIT_USAGE = 2
