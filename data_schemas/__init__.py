@@ -8,7 +8,9 @@ from data_schemas.actions import (
     validate_actions,
     write_actions,
 )
+from data_schemas.annotation import ANNOTATION, read_annotation, write_annotation
 from data_schemas.errors import ArcoError, ParameterError, SchemaError
+from data_schemas.gesture_db import DB_CONTOURS, DB_GROUP_MODELS, DB_NOTES, GESTURE_DB_VERSION
 from data_schemas.io import atomic_path, read_frame, read_table, write_table
 from data_schemas.notes import (
     NOTES,
@@ -18,9 +20,20 @@ from data_schemas.notes import (
     validate_notes,
     write_notes,
 )
+from data_schemas.recording import RECORDING, read_recording, write_recording
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
 __all__ = [
+    "ANNOTATION",
+    "DB_CONTOURS",
+    "DB_GROUP_MODELS",
+    "DB_NOTES",
+    "GESTURE_DB_VERSION",
+    "RECORDING",
+    "read_annotation",
+    "read_recording",
+    "write_annotation",
+    "write_recording",
     "ACTIONS",
     "ACTIONS_VERSION",
     "ArcoError",

@@ -20,6 +20,9 @@ COMMAND_MODULES = (
     "pipelines.commands.demo",
     "pipelines.commands.notes",
     "pipelines.commands.render",
+    "pipelines.commands.simulate_recordings",
+    "pipelines.commands.build_db",
+    "pipelines.commands.db",
 )
 
 EXIT_USAGE = 2

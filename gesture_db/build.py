@@ -1,0 +1,265 @@
+"""Build a gesture database from recordings, in parallel with dask.
+
+Each source (recording file) is one task: load, segment, group, cut contours and fit
+Bezier vectors (:func:`gesture_db.extract.extract_take`). Tasks run on local processes
+(dask's multiprocessing scheduler) by default, or on a dask.distributed cluster when a
+scheduler address (or a :class:`distributed.Client`) is given; the driver writes each
+result as it arrives, so memory stays bounded and a killed build resumes from the sources
+already written. The group models (PCA, Gaussian) are fitted at the end and the new
+generation is committed by replacing ``manifest.json`` atomically.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from data_schemas.gesture_db import (
+    DB_GROUP_MODELS,
+    DB_NOTES,
+    MANIFEST_NAME,
+    read_manifest,
+    write_manifest,
+)
+from data_schemas.io import write_table
+from gesture_db.extract import extract_take
+from gesture_db.features import fit_group_model
+from gesture_db.groups import grammar_for
+from gesture_db.importers import Source, load_source, resolve_sources
+from gesture_db.store import model_row, read_source, remove_unlisted, write_source
+
+
+@dataclass(frozen=True)
+class BuildParams:
+    """Tunable parameters of a build (recorded in the manifest).
+
+    Parameters
+    ----------
+    max_candidates : int
+        Candidate boundary frames per parameter in the Bezier dynamic programme.
+    reduction : float
+        Target ratio of contour to feature dimensions in the PCA.
+    """
+
+    max_candidates: int = 24
+    reduction: float = 4.5
+
+
+def process_source(source: Source, params: BuildParams,
+                   digest: str) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+    """Load and extract every take of one source (runs on a worker).
+
+    Returns
+    -------
+    notes, contours : pandas.DataFrame
+        Concatenated over the source's takes.
+    stats : dict
+        Per-take statistics merged: recording ids, boundary errors, found counts.
+    """
+    recording, annotation = load_source(source)
+    notes, contours = [], []
+    stats: dict = {"path": str(source.path), "recording_ids": [], "onset_errors": [],
+                   "offset_errors": [], "found": 0, "n_true": 0, "n_notes": 0}
+    for rid, take in recording.groupby("recording_id", sort=True):
+        ann = None
+        if annotation is not None:
+            ann = annotation[annotation["recording_id"] == rid]
+        n, c, s = extract_take(take, ann, source_hash=digest, source_path=str(source.path),
+                               max_candidates=params.max_candidates)
+        notes.append(n)
+        contours.append(c)
+        stats["recording_ids"].append(str(rid))
+        stats["n_notes"] += s["n_notes"]
+        for key in ("onset_errors", "offset_errors"):
+            stats[key] += s.get(key, [])
+        stats["found"] += s.get("found", 0)
+        stats["n_true"] += s.get("n_true", 0)
+    return (pd.concat(notes, ignore_index=True), pd.concat(contours, ignore_index=True),
+            stats)
+
+
+def build_database(sources: list[str | os.PathLike], out: str | os.PathLike, *,
+                   workers: int | None = None, scheduler: str | object | None = None,
+                   append: bool = False, params: BuildParams | None = None,
+                   progress: bool = True,
+                   on_source_done: Callable[[str], None] | None = None) -> dict:
+    """Build (or extend) a gesture database.
+
+    Parameters
+    ----------
+    sources : list of path-like
+        Recording files or directories (see :mod:`gesture_db.importers`).
+    out : path-like
+        Database directory.
+    workers : int, optional
+        Local worker processes (default: the number of CPUs); 1 runs in-process.
+    scheduler : str or distributed.Client, optional
+        Address of a dask.distributed scheduler (or a client); overrides ``workers``.
+    append : bool
+        Keep the sources already in the database and add the new ones.
+    params : BuildParams, optional
+        Build parameters.
+    progress : bool
+        Show progress bars.
+    on_source_done : callable, optional
+        Called with each source hash once its results are on disk (used by tests).
+
+    Returns
+    -------
+    dict
+        The committed manifest.
+
+    Raises
+    ------
+    SchemaError
+        For a bad source or an incompatible existing database (which is left intact).
+    """
+    params = params or BuildParams()
+    db = Path(out)
+    previous = read_manifest(db) if (db / MANIFEST_NAME).exists() else None
+    resolved = resolve_sources(sources)
+    digests = [s.digest() for s in resolved]
+    kept: dict[str, dict] = dict(previous["sources"]) if (previous and append) else {}
+    todo: list[tuple[Source, str]] = []
+    seen = set(kept)
+    for src, dig in zip(resolved, digests, strict=True):
+        if dig not in seen:
+            todo.append((src, dig))
+            seen.add(dig)
+    db.mkdir(parents=True, exist_ok=True)
+    results: dict[str, dict] = {}
+    pending = []
+    for src, dig in todo:  # resume: sources written by an interrupted build
+        done = read_source(db, dig)
+        if done is not None:
+            results[dig] = done[1]
+        else:
+            pending.append((src, dig))
+    resumed = len(results)
+    bar = tqdm(total=len(pending), desc="build-db", unit="source", disable=not progress)
+    for dig, (notes, contours, stats) in _run(pending, params, workers, scheduler):
+        write_source(db, dig, notes, contours, stats)
+        results[dig] = read_source(db, dig)[1]
+        bar.update(1)
+        if on_source_done is not None:
+            on_source_done(dig)
+    bar.close()
+    all_sources = {**kept, **{d: _source_entry(s) for d, s in results.items()}}
+    generation = (previous["generation"] + 1) if previous else 1
+    manifest = _commit_models(db, all_sources, generation, params, progress)
+    manifest.update(
+        created=_dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+        build_params={**asdict(params), "append": append,
+                      "workers": workers, "scheduler": None if scheduler is None else "dask"},
+        resumed_sources=resumed)
+    write_manifest(manifest, db)
+    remove_unlisted(db, read_manifest(db))
+    return read_manifest(db)
+
+
+def _source_entry(stats: dict) -> dict:
+    return {k: stats[k] for k in ("path", "recording_ids", "n_notes", "contour_files")}
+
+
+def _run(pending: list[tuple[Source, str]], params: BuildParams, workers: int | None,
+         scheduler) -> Iterator[tuple[str, tuple]]:
+    """Yield (hash, result) per source as results arrive, in a deterministic manner."""
+    if not pending:
+        return
+    if scheduler is not None:
+        yield from _run_distributed(pending, params, scheduler)
+        return
+    workers = workers or os.cpu_count() or 1
+    if workers <= 1 or len(pending) == 1:
+        for src, dig in pending:
+            yield dig, process_source(src, params, dig)
+        return
+    import dask
+
+    batch = 2 * workers
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for start in range(0, len(pending), batch):
+            chunk = pending[start:start + batch]
+            tasks = [dask.delayed(process_source)(src, params, dig) for src, dig in chunk]
+            outs = dask.compute(*tasks, scheduler="processes", pool=pool)
+            for (_src, dig), res in zip(chunk, outs, strict=True):
+                yield dig, res
+
+
+def _run_distributed(pending, params, scheduler) -> Iterator[tuple[str, tuple]]:
+    from distributed import Client, as_completed
+
+    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    try:
+        futures = {client.submit(process_source, src, params, dig, pure=False): dig
+                   for src, dig in pending}
+        for fut in as_completed(futures):
+            yield futures[fut], fut.result()
+            fut.release()
+    finally:
+        if client is not scheduler:
+            client.close()
+
+
+def _commit_models(db: Path, sources: dict[str, dict], generation: int, params: BuildParams,
+                   progress: bool) -> dict:
+    """Fit group models over all sources and write generation ``generation``'s tables."""
+    parts, stats = [], []
+    for dig in sorted(sources):
+        got = read_source(db, dig)
+        if got is None:
+            from data_schemas.errors import SchemaError
+
+            raise SchemaError("processed source files are missing; rebuild without --append",
+                              source=str(db / "sources" / dig))
+        parts.append(got[0])
+        stats.append(got[1])
+    notes = (pd.concat(parts, ignore_index=True) if parts
+             else DB_NOTES.schema.empty_table().to_pandas())
+    notes = notes.sort_values("note_id", ignore_index=True)
+    gen = f"gen-{generation}"
+    files: dict[str, str] = {}
+    rows = []
+    groups = sorted(notes["group"].unique())
+    for group in tqdm(groups, desc="group models", unit="group", disable=not progress):
+        g = notes[notes["group"] == group].copy()
+        P = np.vstack(g["params"].to_numpy())
+        model = fit_group_model(P, reduction=params.reduction)
+        F = model.transform(P)
+        g["features"] = [f.tolist() for f in F]
+        rel = Path("notes") / gen / f"group={group}" / "part.parquet"
+        write_table(g, db / rel, DB_NOTES)
+        files[group] = str(rel)
+        rms = {"bow_velocity": float(g["fit_rms_velocity"].mean()),
+               "bow_force": float(g["fit_rms_force"].mean()),
+               "beta": float(g["fit_rms_beta"].mean())}
+        rows.append(model_row(group, len(g), grammar_for(group), model, rms))
+    models_rel = Path("models") / f"{gen}.parquet"
+    models = pd.DataFrame(rows) if rows else DB_GROUP_MODELS.schema.empty_table().to_pandas()
+    write_table(models, db / models_rel, DB_GROUP_MODELS)
+    return dict(generation=generation, sources=sources,
+                files={"notes": files, "models": str(models_rel)},
+                segmentation=_segmentation_summary(stats), n_notes=int(len(notes)))
+
+
+def _segmentation_summary(stats: list[dict]) -> dict:
+    err = np.concatenate([np.asarray(s.get("onset_errors", []) + s.get("offset_errors", []))
+                          for s in stats]) if stats else np.zeros(0)
+    n_true = sum(s.get("n_true", 0) for s in stats)
+    found = sum(s.get("found", 0) for s in stats)
+    if n_true == 0:
+        return {"median_boundary_error_ms": None, "notes_found_share": None}
+    return {"median_boundary_error_ms": float(np.median(err) * 1e3) if err.size else None,
+            "p90_boundary_error_ms": float(np.percentile(err, 90) * 1e3) if err.size else None,
+            "notes_found_share": found / n_true, "n_true": n_true}
+
+
+__all__ = ["BuildParams", "build_database", "process_source"]

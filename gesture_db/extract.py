@@ -1,0 +1,168 @@
+"""From one take to database rows: segment, group, cut contours and fit Bezier vectors.
+
+:func:`extract_take` is the unit of work of a database build: it is a pure function of the
+take (recording + optional annotation), so parallel builds give identical tables.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from gesture_db.bezier import fit_note
+from gesture_db.groups import CONTOUR_PARAMS, grammar_for, group_names
+from gesture_db.segment import detect_events, detect_notes, refine_boundaries, score_segmentation
+from gesture_db.simulate import _DYN_F, _DYN_LEVEL, OPEN_STRINGS, STRING_LENGTH
+
+_CONTOUR_COLS = ("bow_velocity", "bow_force", "beta", "bow_position", "finger_ratio")
+
+
+def extract_take(recording: pd.DataFrame, annotation: pd.DataFrame | None, *,
+                 source_hash: str, source_path: str,
+                 max_candidates: int = 24) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+    """Segment one take and fit every note.
+
+    Parameters
+    ----------
+    recording : pandas.DataFrame
+        Frames of one take (recording table, a single ``recording_id``).
+    annotation : pandas.DataFrame or None
+        Its aligned score notes; None to detect notes from the signals alone (the notes are
+        then labelled technique ``"unlabelled"``, with direction, slur and run positions,
+        pitch and dynamic estimated from the signals).
+    source_hash, source_path : str
+        Pointer to the source written into every note.
+    max_candidates : int
+        Candidate boundary frames of the Bezier dynamic programme.
+
+    Returns
+    -------
+    notes : pandas.DataFrame
+        Rows of the database notes table (without ``features``).
+    contours : pandas.DataFrame
+        Rows of the contours table plus a ``group`` column.
+    stats : dict
+        ``recording_id``, ``n_notes`` and, with ground truth, the raw boundary errors
+        (``onset_errors`` and ``offset_errors`` in s) and ``found`` / ``n_true`` counts.
+    """
+    rec = recording.sort_values("time", kind="stable").reset_index(drop=True)
+    rid = str(rec["recording_id"].iloc[0]) if len(rec) else "empty"
+    t = rec["time"].to_numpy()
+    events = detect_events(t, rec["bow_velocity"].to_numpy(), rec["bow_force"].to_numpy(),
+                           rec["finger_ratio"].to_numpy(), rec["string"].to_numpy())
+    stats: dict = {"recording_id": rid}
+    if annotation is not None and len(annotation):
+        ann = refine_boundaries(rec, annotation, events=events)
+        notes = ann.assign(onset=ann["seg_onset"], offset=ann["seg_offset"])
+        if "true_onset" in ann and ann["true_onset"].notna().all():
+            end = ann["run_position"].isin(["end", "iso"]).to_numpy()
+            to = np.where(end, ann["true_offset"].to_numpy(float), np.nan)
+            so = np.where(end, notes["offset"].to_numpy(float), np.nan)
+            sc = score_segmentation(ann["true_onset"].to_numpy(float),
+                                    notes["onset"].to_numpy(float), true_offset=to,
+                                    seg_offset=so)
+            err_on = np.abs(notes["onset"].to_numpy() - ann["true_onset"].to_numpy())
+            ok = np.isfinite(to) & np.isfinite(so)
+            stats.update(onset_errors=err_on.tolist(),
+                         offset_errors=np.abs(so[ok] - to[ok]).tolist(),
+                         found=int(round(sc["notes_found_share"] * len(ann))),
+                         n_true=len(ann))
+    else:
+        notes = _blind_notes(rec, events)
+    notes = notes[np.isfinite(notes["offset"]) & (notes["offset"] > notes["onset"] + 1e-3)]
+    notes = notes.reset_index(drop=True)
+    notes["group"] = group_names(notes).to_numpy()
+    fs = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else 240.0
+    i0 = np.clip(np.round((notes["onset"].to_numpy() - t[0]) * fs).astype(int), 0, len(t) - 1)
+    i1 = np.clip(np.round((notes["offset"].to_numpy() - t[0]) * fs).astype(int), 0, len(t) - 1)
+    cols = {c: rec[c].to_numpy(np.float64) for c in _CONTOUR_COLS}
+    params, rms_rows = [], []
+    note_ids = np.array([f"{source_hash}:{rid}:{int(k)}" for k in notes["note_index"]],
+                        dtype=object)
+    i1 = np.maximum(i1, i0 + 1)
+    groups = notes["group"].to_numpy()
+    grammars = {g: grammar_for(g) for g in set(groups)}
+    for k in range(len(notes)):
+        a, b = int(i0[k]), int(i1[k])
+        sig = {c: cols[c][a:b + 1] for c in CONTOUR_PARAMS}
+        p, rms = fit_note(sig, grammars[groups[k]], max_candidates=max_candidates)
+        params.append(p)
+        rms_rows.append(rms)
+    counts = i1 - i0 + 1
+    which = np.repeat(np.arange(len(notes)), counts)
+    frames = (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+              + np.repeat(i0, counts)) if len(notes) else np.zeros(0, int)
+    contours = pd.DataFrame({"note_id": note_ids[which],
+                             "time": t[frames] - notes["onset"].to_numpy()[which],
+                             **{c: cols[c][frames] for c in _CONTOUR_COLS},
+                             "group": groups[which]})
+    fr = notes["finger_ratio"].to_numpy(float)
+    out = pd.DataFrame(dict(
+        note_id=list(note_ids), recording_id=rid,
+        note_index=notes["note_index"].to_numpy(np.int32), source_hash=source_hash,
+        source_path=source_path, group=notes["group"].to_numpy(),
+        technique=notes["technique"].to_numpy(), bow_direction=notes["bow_direction"].to_numpy(),
+        slur_position=notes["slur_position"].to_numpy(),
+        run_position=notes["run_position"].to_numpy(),
+        onset=notes["onset"].to_numpy(float), offset=notes["offset"].to_numpy(float),
+        duration=(notes["offset"] - notes["onset"]).to_numpy(float),
+        midi_pitch=notes["midi_pitch"].to_numpy(np.int16),
+        string=notes["string"].to_numpy(np.int8),
+        effective_string_length=STRING_LENGTH * (1.0 - fr),
+        dynamic=notes["dynamic"].to_numpy(np.float32),
+        params=[p.tolist() for p in params],
+        fit_rms_velocity=[r["bow_velocity"] for r in rms_rows],
+        fit_rms_force=[r["bow_force"] for r in rms_rows],
+        fit_rms_beta=[r["beta"] for r in rms_rows],
+        true_onset=(notes["true_onset"].to_numpy(float) if "true_onset" in notes
+                    else np.full(len(notes), np.nan)),
+        true_offset=(notes["true_offset"].to_numpy(float) if "true_offset" in notes
+                     else np.full(len(notes), np.nan)),
+    ))
+    stats["n_notes"] = len(out)
+    return out, contours, stats
+
+
+def _blind_notes(rec: pd.DataFrame, events) -> pd.DataFrame:
+    """Notes detected without a score, labelled from the signals."""
+    det = detect_notes(rec, events=events)
+    n = len(det)
+    t = rec["time"].to_numpy()
+    fs = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else 240.0
+    mid = np.clip(((0.5 * (det["onset"] + det["offset"]) - t[0]) * fs).astype(int), 0,
+                  len(t) - 1).to_numpy()
+    string = rec["string"].to_numpy()[mid].astype(int)
+    fr = rec["finger_ratio"].to_numpy()[mid]
+    semis = -12.0 * np.log2(np.clip(1.0 - fr, 0.2, 1.0))
+    pitch = np.asarray(OPEN_STRINGS)[string] + np.round(semis).astype(int)
+    force = np.array([rec["bow_force"].to_numpy()[max(int((a - t[0]) * fs), 0):
+                                                    max(int((b - t[0]) * fs), 1)].mean()
+                      for a, b in zip(det["onset"], det["offset"], strict=True)]) if n else []
+    dynamic = np.clip(np.interp(force, _DYN_F, _DYN_LEVEL), 0, 9) if n else []
+    # slur: consecutive notes in one bow direction whose boundary is a finger change
+    from gesture_db.segment import FINGER, START
+
+    kind = det["kind"].to_numpy()
+    offs = det["offset"].to_numpy()
+    ons = det["onset"].to_numpy()
+    linked_next = np.r_[np.abs(offs[:-1] - ons[1:]) < 1e-9, False] if n else np.zeros(0, bool)
+    starts_run = (kind == START) | ~np.r_[False, linked_next[:-1]] if n else np.zeros(0, bool)
+    slur_next = np.r_[kind[1:] == FINGER, False] if n else np.zeros(0, bool)
+    slur_prev = kind == FINGER
+    return pd.DataFrame(dict(
+        note_index=np.arange(n), onset=ons, offset=offs, technique="unlabelled",
+        bow_direction=det["bow_direction"].to_numpy(),
+        slur_position=_position(slur_prev, slur_next),
+        run_position=_position(~starts_run, linked_next & np.r_[~starts_run[1:], False]),
+        midi_pitch=pitch, string=string, finger_ratio=fr, dynamic=dynamic))
+
+
+def _position(prev: np.ndarray, nxt: np.ndarray) -> np.ndarray:
+    out = np.full(prev.size, "iso", dtype=object)
+    out[~prev & nxt] = "init"
+    out[prev & nxt] = "mid"
+    out[prev & ~nxt] = "end"
+    return out
+
+
+__all__ = ["extract_take"]

@@ -1,0 +1,239 @@
+"""Load recordings for the database: Arco files, mapped CSV/Parquet exports, actions tables.
+
+Sources are picked by file name:
+
+- ``*.toml``: a column mapping for a motion-capture export (CSV or Parquet), e.g.::
+
+      [source]
+      path = "take1.csv"          # relative to the TOML file
+      recording_id = "take1"
+      annotation = "take1.annotation.csv"   # optional, an Arco annotation table
+      [columns]                  # Arco name = column in the file
+      time = "Time (s)"
+      bow_velocity = "vel_cm_s"
+      bow_force = "force"
+      beta = "beta"
+      [scale]                    # optional factors to SI units
+      bow_velocity = 0.01
+      [defaults]                 # constants for columns the export lacks
+      string = 2
+      finger_ratio = 0.0
+      bow_position = 0.5
+
+- ``*.parquet`` / ``*.csv`` holding a recording table (``<stem>.annotation.parquet`` or
+  ``.csv`` beside it is its annotation), or an actions table written by ``arco render
+  --actions`` (recognised by its metadata or its ``pluck`` column): resampled to a 240 Hz
+  recording, one string at a time (the most pressed one).
+- A directory: every such file inside it (annotation files excluded).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.csv as pacsv
+import pyarrow.parquet as pq
+
+from data_schemas.annotation import read_annotation
+from data_schemas.errors import ArcoError, SchemaError
+from data_schemas.recording import RECORDING, RECORDING_FRAME_RATE, validate_recording
+
+_DATA_SUFFIXES = (".parquet", ".pq", ".csv")
+
+
+@dataclass(frozen=True)
+class Source:
+    """One recording file to load, with its optional annotation and mapping."""
+
+    path: Path
+    annotation: Path | None = None
+    mapping: Path | None = None
+
+    def digest(self) -> str:
+        """SHA-256 (16 hex digits) over the bytes of the recording, annotation and mapping."""
+        h = hashlib.sha256()
+        files = [self.path, self.annotation, self.mapping]
+        if self.mapping is not None:
+            files.append(_mapped_path(self.mapping))
+        for f in files:
+            if f is None:
+                continue
+            h.update(f.name.encode())
+            with open(f, "rb") as fh:
+                for block in iter(lambda fh=fh: fh.read(1 << 20), b""):
+                    h.update(block)
+        return h.hexdigest()[:16]
+
+
+def resolve_sources(paths: list[str | os.PathLike]) -> list[Source]:
+    """Turn command-line paths (files or directories) into sources, sorted by path.
+
+    Raises
+    ------
+    SchemaError
+        For a missing path or an unsupported file type.
+    """
+    out: list[Source] = []
+    for raw in paths:
+        p = Path(raw)
+        if p.is_dir():
+            files = sorted(f for f in p.iterdir() if f.suffix.lower() in (*_DATA_SUFFIXES, ".toml")
+                           and ".annotation." not in f.name)
+            out += [_source_for(f) for f in files]
+        elif p.exists():
+            out.append(_source_for(p))
+        else:
+            raise SchemaError("recording not found", source=str(p))
+    return sorted(set(out), key=lambda s: str(s.path))
+
+
+def _source_for(path: Path) -> Source:
+    suffix = path.suffix.lower()
+    if suffix == ".toml":
+        return Source(path=path, mapping=path)
+    if suffix not in _DATA_SUFFIXES:
+        raise SchemaError(f"unsupported file type '{suffix}' (use .parquet, .csv or a .toml "
+                          "column mapping)", source=str(path))
+    ann = None
+    for s in (".parquet", ".csv"):
+        cand = path.with_name(f"{path.stem}.annotation{s}")
+        if cand.exists():
+            ann = cand
+            break
+    return Source(path=path, annotation=ann)
+
+
+def _mapped_path(mapping: Path) -> Path:
+    cfg = _read_toml(mapping)
+    rel = cfg.get("source", {}).get("path")
+    if not rel:
+        raise SchemaError("mapping has no [source] path", source=str(mapping), column="path")
+    return (mapping.parent / rel).resolve()
+
+
+def _read_toml(path: Path) -> dict:
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, OSError) as exc:
+        raise SchemaError(f"cannot read mapping: {exc}", source=str(path)) from None
+
+
+def load_source(source: Source) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+    """Load a source as (recording, annotation or None), both validated."""
+    if source.mapping is not None:
+        return load_mapped(source.mapping)
+    recording = load_recording_file(source.path)
+    annotation = read_annotation(source.annotation) if source.annotation else None
+    return recording, annotation
+
+
+def load_recording_file(path: str | os.PathLike) -> pd.DataFrame:
+    """Read a recording table or an actions table (converted) from Parquet or CSV."""
+    path = Path(path)
+    table = _read_any(path)
+    meta = table.schema.metadata or {}
+    kind = meta.get(b"arco_table", b"").decode()
+    if kind == "actions" or (not kind and "pluck" in table.column_names):
+        return recording_from_actions(table.to_pandas(), recording_id=path.stem)
+    if kind and kind != "recording":
+        raise SchemaError(f"holds table '{kind}', expected a recording or actions table",
+                          source=str(path))
+    frame = table.to_pandas()
+    if "recording_id" not in frame:
+        frame.insert(0, "recording_id", path.stem)
+    return validate_recording(frame, source=str(path))
+
+
+def _read_any(path: Path):
+    if not path.exists():
+        raise SchemaError("file not found", source=str(path))
+    try:
+        if path.suffix.lower() == ".csv":
+            return pacsv.read_csv(path)
+        return pq.read_table(path)
+    except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
+        raise SchemaError(f"cannot read: {str(exc).splitlines()[0]}", source=str(path)) from None
+
+
+def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+    """Load a motion-capture export through a TOML column mapping (see module docstring).
+
+    Raises
+    ------
+    SchemaError
+        If a mapped column is missing from the export or a value breaks the recording schema.
+    """
+    mapping = Path(mapping)
+    cfg = _read_toml(mapping)
+    src = cfg.get("source", {})
+    data_path = _mapped_path(mapping)
+    raw = _read_any(data_path).to_pandas()
+    columns = cfg.get("columns", {})
+    scale = cfg.get("scale", {})
+    defaults = cfg.get("defaults", {})
+    frame = pd.DataFrame(index=raw.index)
+    for name in RECORDING.column_names:
+        if name == "recording_id":
+            continue
+        if name in columns:
+            col = columns[name]
+            if col not in raw:
+                raise SchemaError(f"mapped column '{col}' not in the export (has "
+                                  f"{list(raw.columns)})", source=str(data_path), column=name)
+            frame[name] = raw[col].astype(float) * float(scale.get(name, 1.0))
+        elif name in raw:
+            frame[name] = raw[name].astype(float) * float(scale.get(name, 1.0))
+        elif name in defaults:
+            frame[name] = defaults[name]
+        else:
+            raise SchemaError(f"column '{name}' is neither mapped nor given a default",
+                              source=str(mapping), column=name)
+    frame.insert(0, "recording_id", str(src.get("recording_id", data_path.stem)))
+    recording = validate_recording(frame, source=str(data_path))
+    ann = src.get("annotation")
+    annotation = read_annotation(mapping.parent / ann) if ann else None
+    return recording, annotation
+
+
+def recording_from_actions(actions: pd.DataFrame, *, recording_id: str = "actions",
+                           frame_rate: float = RECORDING_FRAME_RATE) -> pd.DataFrame:
+    """Turn an actions table into a recording: one string at a time, resampled.
+
+    At each action time the most pressed string is kept; continuous columns are interpolated
+    linearly onto a ``frame_rate`` grid, string and finger ratio hold their last value.
+    Plucks are dropped.
+
+    Parameters
+    ----------
+    actions : pandas.DataFrame
+        An actions table (``time``, ``string``, ``finger_ratio``, ``bow_force``,
+        ``bow_velocity``, ``beta``, ``bow_position``, ``pluck``).
+    recording_id : str
+        Take identifier.
+    frame_rate : float
+        Output frame rate (Hz).
+    """
+    if actions.empty:
+        raise ArcoError(f"actions table '{recording_id}' is empty")
+    a = actions.sort_values(["time", "bow_force"], kind="stable")
+    a = a.groupby("time", sort=True).tail(1).sort_values("time", kind="stable")
+    t_src = a["time"].to_numpy(float)
+    t = np.arange(t_src[0], t_src[-1] + 0.5 / frame_rate, 1.0 / frame_rate)
+    out = {"recording_id": recording_id, "time": t - t[0]}
+    for c in ("bow_velocity", "bow_force", "beta", "bow_position"):
+        out[c] = np.interp(t, t_src, a[c].to_numpy(float))
+    idx = np.clip(np.searchsorted(t_src, t, side="right") - 1, 0, len(t_src) - 1)
+    out["string"] = a["string"].to_numpy()[idx].astype(np.int8)
+    out["finger_ratio"] = a["finger_ratio"].to_numpy(float)[idx]
+    return validate_recording(pd.DataFrame(out), source=recording_id)
+
+
+__all__ = ["Source", "load_mapped", "load_recording_file", "load_source",
+           "recording_from_actions", "resolve_sources"]

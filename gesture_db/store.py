@@ -1,0 +1,199 @@
+"""The on-disk gesture database: Parquet partitioned by note group, committed by manifest.
+
+Layout (see :mod:`data_schemas.gesture_db`)::
+
+    db/manifest.json                          commit point, replaced atomically
+    db/sources/<hash>.notes.parquet           per-source fits (kept for --append / resume)
+    db/sources/<hash>.stats.json              per-source segmentation statistics
+    db/contours/group=<g>/src-<hash>.parquet  segmented signals
+    db/notes/gen-<n>/group=<g>/part.parquet   notes with features of generation n
+    db/models/gen-<n>.parquet                 group models of generation n
+
+Readers only open files named in the manifest, so files of an unfinished build are
+invisible; a corrupted or foreign file raises :class:`~data_schemas.errors.SchemaError`
+naming it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.errors import SchemaError
+from data_schemas.gesture_db import (
+    DB_CONTOURS,
+    DB_GROUP_MODELS,
+    DB_NOTES,
+    read_manifest,
+)
+from data_schemas.io import atomic_path, read_frame, write_table
+from gesture_db.features import GroupModel
+from gesture_db.groups import Grammar
+
+
+def source_notes_path(db: Path, digest: str) -> Path:
+    """Per-source notes file (its existence marks the source as processed)."""
+    return db / "sources" / f"{digest}.notes.parquet"
+
+
+def source_stats_path(db: Path, digest: str) -> Path:
+    """Per-source statistics file."""
+    return db / "sources" / f"{digest}.stats.json"
+
+
+def contour_path(db: Path, group: str, digest: str) -> Path:
+    """Contours of one source in one group."""
+    return db / "contours" / f"group={group}" / f"src-{digest}.parquet"
+
+
+def write_source(db: Path, digest: str, notes: pd.DataFrame, contours: pd.DataFrame,
+                 stats: dict) -> list[str]:
+    """Write one processed source: contours per group, statistics, then its notes (marker).
+
+    Returns
+    -------
+    list of str
+        Contour files written, relative to ``db``.
+    """
+    files = []
+    for group, part in contours.groupby("group", sort=True):
+        path = contour_path(db, str(group), digest)
+        write_table(part.drop(columns="group"), path, DB_CONTOURS)
+        files.append(str(path.relative_to(db)))
+    stats = {**stats, "contour_files": files}
+    with atomic_path(source_stats_path(db, digest)) as tmp:
+        tmp.write_text(json.dumps(stats))
+    write_table(notes, source_notes_path(db, digest), DB_NOTES)
+    return files
+
+
+def read_source(db: Path, digest: str) -> tuple[pd.DataFrame, dict] | None:
+    """Read a processed source, or None when it was not (completely) written."""
+    notes_path = source_notes_path(db, digest)
+    stats_path = source_stats_path(db, digest)
+    if not notes_path.exists() or not stats_path.exists():
+        return None
+    try:
+        stats = json.loads(stats_path.read_text())
+    except ValueError:
+        return None
+    return read_frame(notes_path, DB_NOTES), stats
+
+
+class GestureDB:
+    """Read access to a committed gesture database.
+
+    Parameters
+    ----------
+    path : path-like
+        Database directory.
+
+    Raises
+    ------
+    SchemaError
+        If the manifest is missing, corrupted or of another schema version.
+    """
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        self.path = Path(path)
+        self.manifest = read_manifest(self.path)
+
+    @property
+    def groups(self) -> list[str]:
+        """Note groups in the database."""
+        return sorted(self.manifest["files"]["notes"])
+
+    def notes(self, group: str | None = None) -> pd.DataFrame:
+        """Notes (all groups, or one), sorted by ``note_id``."""
+        files = self.manifest["files"]["notes"]
+        names = [group] if group else sorted(files)
+        parts = [read_frame(self.path / files[g], DB_NOTES) for g in names if g in files]
+        if not parts:
+            return DB_NOTES.schema.empty_table().to_pandas()
+        return pd.concat(parts, ignore_index=True).sort_values("note_id", ignore_index=True)
+
+    def contours(self, group: str) -> pd.DataFrame:
+        """Contour frames of one group."""
+        files = [f for src in self.manifest["sources"].values()
+                 for f in src["contour_files"] if Path(f).parent.name == f"group={group}"]
+        parts = [read_frame(self.path / f, DB_CONTOURS) for f in sorted(files)]
+        if not parts:
+            return DB_CONTOURS.schema.empty_table().to_pandas()
+        return pd.concat(parts, ignore_index=True)
+
+    def models(self) -> pd.DataFrame:
+        """Group models table."""
+        return read_frame(self.path / self.manifest["files"]["models"], DB_GROUP_MODELS)
+
+    def group_model(self, group: str) -> tuple[GroupModel, Grammar]:
+        """The PCA/Gaussian model and grammar of ``group``."""
+        models = self.models()
+        rows = models[models["group"] == group]
+        if rows.empty:
+            raise SchemaError(f"no model for group '{group}'", source=str(self.path))
+        return model_from_row(rows.iloc[0]), Grammar.from_json(rows.iloc[0]["grammar"])
+
+    def verify(self) -> None:
+        """Open every file of the database (raises SchemaError naming a bad one)."""
+        self.notes()
+        self.models()
+        for src in self.manifest["sources"].values():
+            for f in src["contour_files"]:
+                read_frame(self.path / f, DB_CONTOURS)
+
+
+def model_row(group: str, n_notes: int, grammar: Grammar, model: GroupModel,
+              rms: dict[str, float]) -> dict:
+    """One row of the group models table."""
+    return dict(group=group, n_notes=n_notes, grammar=grammar.to_json(),
+                param_dim=model.param_dim, feature_dim=model.feature_dim,
+                param_mean=model.param_mean.tolist(), param_scale=model.param_scale.tolist(),
+                components=model.components.ravel().tolist(),
+                explained_variance_ratio=model.explained_variance_ratio.tolist(),
+                feature_mean=model.feature_mean.tolist(),
+                feature_cov=model.feature_cov.ravel().tolist(), shrinkage=model.shrinkage,
+                rms_velocity=rms["bow_velocity"], rms_force=rms["bow_force"],
+                rms_beta=rms["beta"])
+
+
+def model_from_row(row: pd.Series) -> GroupModel:
+    """Inverse of :func:`model_row`."""
+    d = int(row["param_dim"])
+    k = int(row["feature_dim"])
+    return GroupModel(
+        param_mean=np.asarray(row["param_mean"], float),
+        param_scale=np.asarray(row["param_scale"], float),
+        components=np.asarray(row["components"], float).reshape(k, d),
+        explained_variance_ratio=np.asarray(row["explained_variance_ratio"], float),
+        feature_mean=np.asarray(row["feature_mean"], float),
+        feature_cov=np.asarray(row["feature_cov"], float).reshape(k, k),
+        shrinkage=float(row["shrinkage"]))
+
+
+def remove_unlisted(db: Path, manifest: dict) -> None:
+    """Delete generations and sources that the committed manifest no longer names."""
+    gen = f"gen-{manifest['generation']}"
+    for d in (db / "notes").glob("gen-*"):
+        if d.name != gen:
+            shutil.rmtree(d, ignore_errors=True)
+    for f in (db / "models").glob("gen-*.parquet"):
+        if f.stem != gen:
+            f.unlink(missing_ok=True)
+    keep = set(manifest["sources"])
+    for f in (db / "sources").glob("*.*"):
+        if f.name.split(".")[0] not in keep:
+            f.unlink(missing_ok=True)
+    for f in (db / "contours").glob("group=*/src-*.parquet"):
+        if f.stem.removeprefix("src-") not in keep:
+            f.unlink(missing_ok=True)
+    for f in db.rglob(".*.tmp"):
+        f.unlink(missing_ok=True)
+
+
+__all__ = ["GestureDB", "contour_path", "model_from_row", "model_row", "read_source",
+           "remove_unlisted", "source_notes_path", "write_source"]

@@ -1,0 +1,38 @@
+"""``arco build-db``: segment recordings, fit contours and features, store as Parquet."""
+
+from __future__ import annotations
+
+import argparse
+
+from gesture_db.build import build_database
+
+
+def register(subparsers) -> None:
+    """Add the ``build-db`` sub-command."""
+    p = subparsers.add_parser(
+        "build-db", help="build the gesture database from recordings",
+        description="Segment recordings into notes, fit Bezier contours, PCA and Gaussians "
+                    "per note group and write the database (Parquet partitioned by group).")
+    p.add_argument("recordings", nargs="+",
+                   help="recording files (.parquet/.csv, actions tables, .toml mappings) "
+                        "or directories")
+    p.add_argument("-o", "--output", required=True, help="database directory")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes")
+    p.add_argument("--scheduler", default=None, help="dask.distributed scheduler address")
+    p.add_argument("--append", action="store_true",
+                   help="add recordings to an existing database without rebuilding it")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Build and print a one-line summary."""
+    m = build_database(args.recordings, args.output, workers=args.workers,
+                       scheduler=args.scheduler, append=args.append)
+    seg = m.get("segmentation", {})
+    extra = ""
+    if seg.get("median_boundary_error_ms") is not None:
+        extra = (f"; median boundary error {seg['median_boundary_error_ms']:.2f} ms, "
+                 f"notes found {100 * seg['notes_found_share']:.2f} %")
+    print(f"{args.output}: generation {m['generation']}, {m['n_notes']} notes in "
+          f"{len(m['files']['notes'])} groups from {len(m['sources'])} sources{extra}")
+    return 0

@@ -1,0 +1,37 @@
+"""``arco db info``: counts, dimensions, fit errors, segmentation scores and group plots."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from gesture_db.info import format_summary, plot_groups, summarize
+from gesture_db.store import GestureDB
+
+
+def register(subparsers) -> None:
+    """Add the ``db`` sub-command with its ``info`` action."""
+    p = subparsers.add_parser("db", help="inspect a gesture database")
+    sub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    info = sub.add_parser("info", help="summary and a PNG per group of mean contour +- 1 sd")
+    info.add_argument("database", help="database directory")
+    info.add_argument("--json", action="store_true", help="print JSON")
+    info.add_argument("--plots", default=None,
+                      help="directory for the PNGs (default DATABASE/plots)")
+    info.add_argument("--no-plots", action="store_true", help="skip the PNGs")
+    info.set_defaults(func=run_info)
+
+
+def run_info(args: argparse.Namespace) -> int:
+    """Print the summary and write the plots."""
+    db = GestureDB(args.database)
+    summary = summarize(db)
+    if not args.no_plots:
+        out = Path(args.plots) if args.plots else Path(args.database) / "plots"
+        summary["plots"] = [str(p) for p in plot_groups(db, out, progress=not args.json)]
+    if args.json:
+        print(json.dumps(summary, indent=1))
+    else:
+        print(format_summary(summary))
+    return 0
