@@ -9,6 +9,7 @@ from data_schemas.actions import (
     write_actions,
 )
 from data_schemas.annotation import ANNOTATION, read_annotation, write_annotation
+from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
 from data_schemas.errors import ArcoError, ParameterError, SchemaError
 from data_schemas.gesture_db import DB_CONTOURS, DB_GROUP_MODELS, DB_NOTES, GESTURE_DB_VERSION
 from data_schemas.io import atomic_path, read_frame, read_table, write_table
@@ -37,6 +38,7 @@ __all__ = [
     "ACTIONS",
     "ACTIONS_VERSION",
     "ArcoError",
+    "CONTACT_DIAGNOSTICS",
     "Column",
     "NOTES",
     "NOTES_VERSION",

@@ -36,7 +36,7 @@ ACTIONS = TableSpec(
                "1 - 2**(-semitones/12) for a stopped note.",
                minimum=0.0, maximum=0.8),
         Column("bow_force", pa.float64(), "N", "Normal force of the bow on the string.",
-               minimum=0.0, maximum=20.0),
+               minimum=0.0, maximum=50.0),
         Column("bow_velocity", pa.float64(), "m/s",
                "Bow velocity across the string, + = down-bow, - = up-bow.",
                minimum=-5.0, maximum=5.0),

@@ -63,8 +63,10 @@ class Column:
 
     def range_text(self) -> str:
         """Describe the allowed range, e.g. ``0 < x < 0.5``."""
-        lo = "" if self.minimum is None else f"{self.minimum} {'<' if self.exclusive_minimum else '<='} "
-        hi = "" if self.maximum is None else f" {'<' if self.exclusive_maximum else '<='} {self.maximum}"
+        lo_op = "<" if self.exclusive_minimum else "<="
+        hi_op = "<" if self.exclusive_maximum else "<="
+        lo = "" if self.minimum is None else f"{self.minimum} {lo_op} "
+        hi = "" if self.maximum is None else f" {hi_op} {self.maximum}"
         return f"{lo}{self.name}{hi}"
 
 
@@ -202,8 +204,9 @@ def _check_column(array: pa.ChunkedArray, col: Column, source: str) -> None:
                             else (values > col.maximum))
     if bad.any():
         row = _first_true(bad)
-        raise SchemaError(f"value {float(values[row])!r} outside the allowed range {col.range_text()}",
-                          source=source, column=col.name, row=row)
+        raise SchemaError(
+            f"value {float(values[row])!r} outside the allowed range {col.range_text()}",
+            source=source, column=col.name, row=row)
 
 
 def non_decreasing(column: str, *, within: str | None = None) -> TableCheck:

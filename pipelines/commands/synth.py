@@ -1,0 +1,44 @@
+"""``arco synth ACTIONS -o out.wav``: play an actions table on an instrument."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from data_schemas.actions import read_actions
+from data_schemas.errors import ParameterError
+from pipelines.audio_io import write_audio
+from synth import INSTRUMENT_NAMES, render_actions
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``synth`` sub-command."""
+    p = subparsers.add_parser("synth", help="render an actions table (Parquet or CSV) to audio",
+                              description=__doc__)
+    p.add_argument("actions", type=Path, help="actions table, .parquet or .csv")
+    p.add_argument("-o", "--output", type=Path, required=True,
+                   help="audio file to write (.wav or .flac)")
+    p.add_argument("--instrument", choices=INSTRUMENT_NAMES, default="violin")
+    p.add_argument("--seed", type=int, default=0, help="seed of the friction noise")
+    p.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000))
+    p.add_argument("--oversample", type=int, choices=(1, 2, 4), default=None,
+                   help="internal oversampling (default 2)")
+    p.add_argument("--body", default="synthesized",
+                   help="'synthesized' (default), 'none', or a WAV impulse response")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read, render and write."""
+    actions = read_actions(args.actions)
+    if actions.empty:
+        raise ParameterError(f"{args.actions}: the actions table has no rows")
+    body = None if args.body == "none" else args.body
+    audio = render_actions(actions, instrument=args.instrument, sample_rate=args.sample_rate,
+                           seed=args.seed, oversample=args.oversample, body=body,
+                           progress=not args.quiet and sys.stderr.isatty())
+    write_audio(args.output, audio, args.sample_rate)
+    print(f"wrote {args.output} ({audio.size / args.sample_rate:.2f} s, {args.instrument})")
+    return 0

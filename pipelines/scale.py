@@ -1,0 +1,52 @@
+"""A built-in exercise: a detache pentachord on every string, as an actions table."""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from synth.strings import load_instrument
+
+#: Semitones above the open string of the built-in exercise.
+SCALE_STEPS = (0, 2, 4, 5, 7)
+NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
+
+
+def note_name(midi_pitch: int) -> str:
+    """Scientific pitch name of a MIDI pitch (60 -> C4)."""
+    return f"{NOTE_NAMES[midi_pitch % 12]}{midi_pitch // 12 - 1}"
+
+
+def scale_actions(instrument: str, *, note_duration: float = 0.45, bow_velocity: float = 0.3,
+                  beta: float = 0.1, start: float = 0.0) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Build the actions of a detache pentachord up every string of ``instrument``.
+
+    Each note accelerates to ``bow_velocity`` (m/s) in 50 ms, holds, and stops before the
+    bow change; the force is the string's reference force (its Helmholtz mid force at
+    beta 0.1, 0.3 m/s) scaled with velocity.
+
+    Returns
+    -------
+    actions : pandas.DataFrame
+        Actions table.
+    events : pandas.DataFrame
+        ``t0`` (s), ``label`` (note name), ``direction`` (+1 down, -1 up) per note.
+    """
+    constants = load_instrument(instrument)
+    rows, events = [], []
+    t = start
+    direction = 1.0
+    for s, string in enumerate(constants.strings):
+        force = string.reference_force * bow_velocity / 0.3
+        for step in SCALE_STEPS:
+            finger = 1.0 - 2.0 ** (-step / 12.0)
+            for dt, v, f in ((0.0, 0.0, 0.0), (0.05, bow_velocity, force),
+                             (note_duration - 0.08, bow_velocity, force),
+                             (note_duration - 0.02, 0.0, 0.0)):
+                rows.append((t + dt, s, finger, f, direction * v, beta, 0.5, False))
+            events.append((t, note_name(string.midi_pitch + step), int(direction)))
+            t += note_duration
+            direction = -direction
+        t += 0.2
+    actions = pd.DataFrame(rows, columns=["time", "string", "finger_ratio", "bow_force",
+                                          "bow_velocity", "beta", "bow_position", "pluck"])
+    return actions, pd.DataFrame(events, columns=["t0", "label", "direction"])

@@ -1,0 +1,98 @@
+"""Contact diagnostics of a block: what the string did under the bow.
+
+The teacher and the evaluation read these; the feedback controller never does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synth.modal_kernel import CONTACT_NONE, CONTACT_SLIP
+
+
+@dataclass(frozen=True)
+class ContactDiagnostics:
+    """What one string did during one block.
+
+    Attributes
+    ----------
+    slip_onsets : int
+        Number of transitions into slipping.
+    slipping_share : float
+        Fraction of the block's samples spent slipping (0..1).
+    contact_share : float
+        Fraction of the block's samples with the bow (or a plucking finger) on the string.
+    mean_slip_speed : float, m/s
+        Mean |slip velocity| over slipping samples (0 when none).
+    sounding_period : float, s
+        Median interval between consecutive slip onsets, the last onset of earlier blocks
+        included; NaN when fewer than two onsets are known.
+    onset_times : np.ndarray [shape=(slip_onsets,)], s
+        Times of the slip onsets from the start of the performance.
+    """
+
+    slip_onsets: int
+    slipping_share: float
+    contact_share: float
+    mean_slip_speed: float
+    sounding_period: float
+    onset_times: np.ndarray = field(repr=False)
+
+
+class OnsetTracker:
+    """Turns per-sample contact states into :class:`ContactDiagnostics`, block after block."""
+
+    def __init__(self, internal_rate: float) -> None:
+        self.internal_rate = float(internal_rate)
+        self._last_state = CONTACT_NONE
+        self._last_onset = np.nan
+
+    def reset(self) -> None:
+        """Forget earlier blocks."""
+        self._last_state = CONTACT_NONE
+        self._last_onset = np.nan
+
+    def update(self, contact: np.ndarray, slip_velocity: np.ndarray,
+               start_sample: int) -> ContactDiagnostics:
+        """Summarise a block that starts at internal sample ``start_sample``."""
+        slipping = contact == CONTACT_SLIP
+        previous = np.concatenate([[self._last_state == CONTACT_SLIP], slipping[:-1]])
+        onsets = np.flatnonzero(slipping & ~previous)
+        times = (start_sample + onsets) / self.internal_rate
+        known = np.concatenate([[self._last_onset], times]) if np.isfinite(self._last_onset) \
+            else times
+        period = float(np.median(np.diff(known))) if known.size >= 2 else float("nan")
+        if contact.size:
+            self._last_state = int(contact[-1])
+        if times.size:
+            self._last_onset = float(times[-1])
+        n = max(contact.size, 1)
+        n_slip = int(np.count_nonzero(slipping))
+        return ContactDiagnostics(
+            slip_onsets=int(onsets.size),
+            slipping_share=n_slip / n,
+            contact_share=float(np.count_nonzero(contact != CONTACT_NONE)) / n,
+            mean_slip_speed=float(slip_velocity[slipping].mean()) if n_slip else 0.0,
+            sounding_period=period,
+            onset_times=times,
+        )
+
+
+def merge_diagnostics(parts: list[ContactDiagnostics]) -> ContactDiagnostics:
+    """Combine the diagnostics of consecutive equal-length hops into one."""
+    times = np.concatenate([p.onset_times for p in parts]) if parts else np.zeros(0)
+    n_slip_share = float(np.mean([p.slipping_share for p in parts])) if parts else 0.0
+    weights = np.array([p.slipping_share for p in parts])
+    speeds = np.array([p.mean_slip_speed for p in parts])
+    periods = np.diff(times)
+    return ContactDiagnostics(
+        slip_onsets=int(times.size),
+        slipping_share=n_slip_share,
+        contact_share=float(np.mean([p.contact_share for p in parts])) if parts else 0.0,
+        mean_slip_speed=float(np.sum(weights * speeds) / weights.sum()) if weights.sum() else 0.0,
+        sounding_period=float(np.median(periods)) if periods.size else (
+            parts[-1].sounding_period if parts else float("nan")),
+        onset_times=times,
+    )

@@ -1,0 +1,347 @@
+"""An instrument: all its strings simulated together, summed at the bridge, through the body.
+
+Two ways in:
+
+- the **block API** (:meth:`Instrument.process`) for the listening feedback loop: the object
+  keeps its state and advances by N output samples under given controls, returning the audio
+  block and the contact diagnostics of each string;
+- :func:`render_actions`, which plays a whole actions table (see
+  :data:`data_schemas.ACTIONS`).
+
+Both share one core (:meth:`Instrument._run`), which advances every excited string at the
+internal (oversampled) rate, low-pass filters and decimates the summed bridge force, and
+convolves it with the body response.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from data_schemas.actions import ACTIONS
+from data_schemas.errors import ParameterError
+from synth.body import BlockConvolver, load_body_ir, synthesize_body_ir
+from synth.decimate import Decimator
+from synth.diagnostics import ContactDiagnostics, OnsetTracker, merge_diagnostics
+from synth.modal_kernel import MODE_BOW, MODE_GRIP, MODE_LIFTED
+from synth.strings import InstrumentConstants, load_instrument
+from synth.voice import StringOutput, StringVoice
+
+SUPPORTED_SAMPLE_RATES = (44100, 48000)
+SUPPORTED_OVERSAMPLING = (1, 2, 4)
+#: Default oversampling and mode band; see README "Sound and speed" for the measurements.
+DEFAULT_OVERSAMPLE = 2
+DEFAULT_MAX_MODE_FREQUENCY = 20000.0
+#: Output samples per coefficient update of beta and finger (1.45 ms at 44.1 kHz).
+SUB_BLOCK = 64
+#: A pluck pulls the string this far (m) at this speed (m/s), then lets go.
+PLUCK_DISPLACEMENT = 0.005
+PLUCK_SPEED = 0.1
+#: Output level: audio = OUTPUT_GAIN * body(bridge force in N).
+OUTPUT_GAIN = 0.05
+
+BodySpec = str | os.PathLike | np.ndarray | None
+
+
+@dataclass(frozen=True)
+class BowControl:
+    """Bowing of one string at the end of a block.
+
+    Attributes
+    ----------
+    bow_velocity : float, m/s (+ = down-bow)
+    bow_force : float, N
+    beta : float
+        Bow-bridge distance / effective string length.
+    finger_ratio : float
+        Fraction of the string length removed by the finger (0 = open).
+    """
+
+    bow_velocity: float
+    bow_force: float
+    beta: float
+    finger_ratio: float = 0.0
+
+
+@dataclass
+class StringInput:
+    """Controls of one string over a run at the internal rate.
+
+    Attributes
+    ----------
+    bow_velocity, bow_force : np.ndarray [shape=(n_internal,)], m/s and N
+    contact_mode : np.ndarray [shape=(n_internal,)], int8
+    beta, finger_ratio : np.ndarray [shape=(n_sub_blocks,)]
+        One value per :data:`SUB_BLOCK` output samples.
+    pluck_offsets : sequence of int
+        Internal-sample offsets in this run where plucks start.
+    """
+
+    bow_velocity: np.ndarray
+    bow_force: np.ndarray
+    contact_mode: np.ndarray
+    beta: np.ndarray
+    finger_ratio: np.ndarray
+    pluck_offsets: tuple[int, ...] = ()
+
+
+@dataclass
+class Block:
+    """Output of :meth:`Instrument.process`.
+
+    Attributes
+    ----------
+    audio : np.ndarray [shape=(n_samples,)], float32
+    bridge_force : np.ndarray [shape=(n_samples,)], N
+        Summed bridge force after decimation, before the body.
+    diagnostics : dict of int to ContactDiagnostics
+        Per string that has been excited, over the whole block.
+    hop_diagnostics : dict of int to list of ContactDiagnostics
+        The same per hop, when the block was run with a hop size (else empty).
+    """
+
+    audio: np.ndarray
+    bridge_force: np.ndarray
+    diagnostics: dict[int, ContactDiagnostics]
+    hop_diagnostics: dict[int, list[ContactDiagnostics]] = field(default_factory=dict)
+
+
+class Instrument:
+    """Violin, viola or cello: four modal strings, an anti-alias decimator and a body.
+
+    Parameters
+    ----------
+    name : {"violin", "viola", "cello"} or InstrumentConstants
+    sample_rate : {44100, 48000}, Hz
+        Output sample rate.
+    oversample : {1, 2, 4}, optional
+        Internal rate = ``oversample * sample_rate`` (default :data:`DEFAULT_OVERSAMPLE`).
+    seed : int
+        Seed of the friction noise and of the synthesized body.
+    body : {"synthesized"} or path-like or np.ndarray or None
+        Body impulse response: synthesized, loaded from a WAV, given, or none.
+    max_modes : int, optional
+        Cap on modes per string (default: all below the internal Nyquist frequency).
+    max_mode_frequency : float or None, Hz
+        Keep only modes below this frequency (default 20 kHz, the audible band; None keeps
+        every mode below the internal Nyquist frequency).
+    friction_noise : float
+        Depth of the friction noise on v0.
+    config : path-like, optional
+        Alternative string-constants TOML.
+    """
+
+    def __init__(self, name: str | InstrumentConstants = "violin", *, sample_rate: int = 44100,
+                 oversample: int | None = None, seed: int = 0, body: BodySpec = "synthesized",
+                 max_modes: int | None = None,
+                 max_mode_frequency: float | None = DEFAULT_MAX_MODE_FREQUENCY,
+                 friction_noise: float = 0.02,
+                 config: str | os.PathLike | None = None) -> None:
+        oversample = DEFAULT_OVERSAMPLE if oversample is None else int(oversample)
+        if sample_rate not in SUPPORTED_SAMPLE_RATES:
+            raise ParameterError(f"sample_rate={sample_rate} is not supported; "
+                                 f"use one of {SUPPORTED_SAMPLE_RATES}")
+        if oversample not in SUPPORTED_OVERSAMPLING:
+            raise ParameterError(f"oversample={oversample} is not supported; "
+                                 f"use one of {SUPPORTED_OVERSAMPLING}")
+        self.constants: InstrumentConstants = (
+            name if isinstance(name, InstrumentConstants) else load_instrument(name, config))
+        self.sample_rate = int(sample_rate)
+        self.oversample = oversample
+        self.internal_rate = self.sample_rate * oversample
+        seeds = np.random.SeedSequence(seed).spawn(len(self.constants.strings) + 1)
+        self.voices = [
+            StringVoice(s, self.internal_rate, np.random.default_rng(sq),
+                        friction_noise=friction_noise, max_modes=max_modes,
+                        max_mode_frequency=max_mode_frequency)
+            for s, sq in zip(self.constants.strings, seeds, strict=False)
+        ]
+        self.body_response = self._body(body, int(seeds[-1].generate_state(1)[0]))
+        self._trackers = [OnsetTracker(self.internal_rate) for _ in self.voices]
+        self.reset()
+
+    @property
+    def name(self) -> str:
+        """Instrument name."""
+        return self.constants.name
+
+    @property
+    def n_strings(self) -> int:
+        """Number of strings."""
+        return len(self.voices)
+
+    @property
+    def time(self) -> float:
+        """Time of the next output sample, s."""
+        return self._sample / self.sample_rate
+
+    def reset(self) -> None:
+        """Bring every string to rest and clear the filters (same seed streams go on)."""
+        for voice, tracker in zip(self.voices, self._trackers, strict=True):
+            voice.reset()
+            tracker.reset()
+        self._decimator = Decimator(self.sample_rate, self.oversample)
+        self._convolver = (BlockConvolver(self.body_response)
+                           if self.body_response is not None else None)
+        self._sample = 0
+        self._grip_until = [0] * self.n_strings
+        self._held = [BowControl(0.0, 0.0, 0.1, 0.0) for _ in self.voices]
+
+    def _body(self, body: BodySpec, seed: int) -> np.ndarray | None:
+        if body is None:
+            return None
+        if isinstance(body, np.ndarray):
+            return np.asarray(body, dtype=np.float64)
+        if isinstance(body, str) and body == "synthesized":
+            return synthesize_body_ir(self.sample_rate, body_scale=self.constants.body_scale,
+                                      seed=seed)
+        return load_body_ir(body, self.sample_rate)
+
+    # -- block API ---------------------------------------------------------------------
+
+    def process(self, n_samples: int, controls: Mapping[int, BowControl | None] | None = None,
+                *, plucks: Iterable[int] = ()) -> Block:
+        """Advance by ``n_samples`` output samples.
+
+        Bow velocity and force ramp linearly from the previous block's values to the given
+        ones; beta and the finger take their new values at the block start. A string that
+        is missing from ``controls`` (or maps to None) has the bow lifted and rings on.
+
+        Parameters
+        ----------
+        n_samples : int
+            Output samples to produce (a multiple of :data:`SUB_BLOCK` keeps blocks aligned
+            with coefficient updates, but any positive size works).
+        controls : mapping of int to BowControl or None
+            String index (0 = lowest) to its bowing at the end of the block.
+        plucks : iterable of int
+            Strings plucked at the start of this block.
+
+        Returns
+        -------
+        Block
+        """
+        if n_samples <= 0:
+            raise ParameterError(f"n_samples={n_samples} must be positive")
+        controls = dict(controls or {})
+        plucked = set(plucks)
+        inputs = {}
+        n_internal = n_samples * self.oversample
+        n_sub = -(-n_samples // SUB_BLOCK)
+        for s in set(controls) | plucked:
+            self._check_string(s)
+            new = controls.get(s)
+            old = self._held[s]
+            target = new or BowControl(0.0, 0.0, old.beta, old.finger_ratio)
+            _check_control(target, s)
+            velocity = np.linspace(old.bow_velocity, target.bow_velocity, n_internal + 1)[1:]
+            force = np.linspace(old.bow_force, target.bow_force, n_internal + 1)[1:]
+            mode = np.full(n_internal, MODE_BOW if new is not None else MODE_LIFTED, np.int8)
+            mode[force <= 0.0] = MODE_LIFTED
+            inputs[s] = StringInput(velocity, force, mode, np.full(n_sub, target.beta),
+                                    np.full(n_sub, target.finger_ratio),
+                                    (0,) if s in plucked else ())
+            self._held[s] = target
+        return self._run(n_samples, inputs)
+
+    def _check_string(self, s: int) -> None:
+        if not 0 <= s < self.n_strings:
+            raise ParameterError(f"string={s} does not exist on the {self.name} "
+                                 f"(0..{self.n_strings - 1})")
+
+    # -- shared core -------------------------------------------------------------------
+
+    def _run(self, n_samples: int, inputs: Mapping[int, StringInput],
+             *, hop: int | None = None) -> Block:
+        """Advance every excited string by ``n_samples`` output samples under ``inputs``."""
+        n_internal = n_samples * self.oversample
+        total = np.zeros(n_internal)
+        out = StringOutput(np.empty(n_internal), np.empty(n_internal),
+                           np.empty(n_internal, np.int8))
+        diagnostics, per_hop = {}, {}
+        start = self._sample * self.oversample
+        for s, voice in enumerate(self.voices):
+            given = inputs.get(s)
+            if given is None and not voice.excited:
+                continue
+            given = given or self._lifted(s, n_samples)
+            self._apply_plucks(s, given, start)
+            self._advance_runs(voice, given, out)
+            total += out.bridge_force
+            held = self._held[s]
+            self._held[s] = BowControl(held.bow_velocity, held.bow_force,
+                                       float(given.beta[-1]), float(given.finger_ratio[-1]))
+            if hop:
+                per_hop[s] = self._track_hops(s, out, start, hop * self.oversample)
+                diagnostics[s] = merge_diagnostics(per_hop[s])
+            else:
+                diagnostics[s] = self._trackers[s].update(out.contact, out.slip_velocity, start)
+        bridge = self._decimator.process(total)
+        audio = self._convolver.process(bridge) if self._convolver is not None else bridge
+        self._sample += n_samples
+        return Block((OUTPUT_GAIN * audio).astype(np.float32), bridge, diagnostics, per_hop)
+
+    def _track_hops(self, s: int, out: StringOutput, start: int,
+                    hop: int) -> list[ContactDiagnostics]:
+        tracker = self._trackers[s]
+        return [tracker.update(out.contact[i:i + hop], out.slip_velocity[i:i + hop], start + i)
+                for i in range(0, out.contact.size, hop)]
+
+    def _lifted(self, s: int, n_samples: int) -> StringInput:
+        held = self._held[s]
+        n_internal = n_samples * self.oversample
+        n_sub = -(-n_samples // SUB_BLOCK)
+        zeros = np.zeros(n_internal)
+        return StringInput(zeros, zeros, np.zeros(n_internal, np.int8),
+                           np.full(n_sub, held.beta), np.full(n_sub, held.finger_ratio))
+
+    def _apply_plucks(self, s: int, given: StringInput, start: int) -> None:
+        """Turn pluck starts and a pluck still pulling into grip samples."""
+        pull = int(round(PLUCK_DISPLACEMENT / PLUCK_SPEED * self.internal_rate))
+        for offset in given.pluck_offsets:
+            self._grip_until[s] = start + offset + pull
+        n = given.contact_mode.size
+        grip_end = min(self._grip_until[s] - start, n)
+        if grip_end <= 0:
+            return
+        first = min(given.pluck_offsets, default=0)
+        given.contact_mode = given.contact_mode.copy()
+        given.bow_velocity = given.bow_velocity.copy()
+        given.contact_mode[first:grip_end] = MODE_GRIP
+        given.bow_velocity[first:grip_end] = PLUCK_SPEED
+        if grip_end < n and self._grip_until[s] - start == grip_end:
+            release = slice(grip_end, n)
+            given.contact_mode[release] = np.where(given.bow_force[release] > 0,
+                                                   given.contact_mode[release], MODE_LIFTED)
+
+    def _advance_runs(self, voice: StringVoice, given: StringInput, out: StringOutput) -> None:
+        """Call the kernel once per run of sub-blocks sharing beta and finger."""
+        per_sub = SUB_BLOCK * self.oversample
+        keys = np.stack([np.round(given.beta / 1e-4), np.round(given.finger_ratio / 1e-5)])
+        change = np.flatnonzero(np.any(keys[:, 1:] != keys[:, :-1], axis=0)) + 1
+        bounds = np.concatenate([[0], change, [keys.shape[1]]])
+        n = given.bow_velocity.size
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+            lo, hi = a * per_sub, min(b * per_sub, n)
+            view = StringOutput(out.bridge_force[lo:hi], out.slip_velocity[lo:hi],
+                                out.contact[lo:hi])
+            voice.advance(given.bow_velocity[lo:hi], given.bow_force[lo:hi],
+                          given.contact_mode[lo:hi], float(given.beta[a]),
+                          float(given.finger_ratio[a]), view)
+
+
+def _check_control(control: BowControl, string: int) -> None:
+    """Reject controls outside the ranges the actions table documents."""
+    for name in ("bow_force", "bow_velocity", "beta", "finger_ratio"):
+        column = ACTIONS.column(name)
+        value = getattr(control, name)
+        low_ok = column.minimum is None or (
+            value > column.minimum if column.exclusive_minimum else value >= column.minimum)
+        high_ok = column.maximum is None or (
+            value < column.maximum if column.exclusive_maximum else value <= column.maximum)
+        if not (np.isfinite(value) and low_ok and high_ok):
+            raise ParameterError(f"{name}={value} on string {string} is outside "
+                                 f"{column.range_text()} ({column.unit})")

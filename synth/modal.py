@@ -1,0 +1,195 @@
+"""Modal bowed string: physical parameters -> per-mode step coefficients.
+
+Bridge at x = 0, nut at x = L. Mode shapes phi_n(x) = sqrt(2/L) sin(n pi x / L). Each mode
+is advanced with the exact solution of a damped oscillator under a force held constant over
+the sample (stable at any mode frequency). All coefficients are computed here, once per
+change of bow position (``beta``) or finger, never inside the sample loop; the loop itself is
+:func:`synth.modal_kernel.advance_string`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from synth.strings import StringConstants
+
+
+@dataclass(frozen=True)
+class ModeBasis:
+    """Mode frequencies, decay rates and free-step coefficients of one string.
+
+    Attributes
+    ----------
+    omega : np.ndarray [shape=(n_modes,)], rad/s
+        Undamped angular frequencies w0_n.
+    decay : np.ndarray [shape=(n_modes,)], 1/s
+        Decay rates r_n.
+    free : np.ndarray [shape=(4, n_modes)]
+        ``(c_aa, c_av, c_va, c_vv)``: a' = c_aa a + c_av v, v' = c_va a + c_vv v.
+    force_to_displacement, force_to_velocity : np.ndarray [shape=(n_modes,)], m/N, m/(s N)
+        End-of-step modal displacement and velocity per unit modal force (1/rho_L included).
+    bridge_gain : np.ndarray [shape=(n_modes,)], N/m
+        Bridge force per unit modal amplitude, sqrt(2/L) (T k_n + EI k_n**3).
+    """
+
+    string: StringConstants
+    sample_rate: float
+    omega: np.ndarray
+    decay: np.ndarray
+    free: np.ndarray
+    force_to_displacement: np.ndarray
+    force_to_velocity: np.ndarray
+    bridge_gain: np.ndarray
+
+    @property
+    def n_modes(self) -> int:
+        """Number of simulated modes."""
+        return self.omega.size
+
+    def shape(self, x: float) -> np.ndarray:
+        """Mode shapes phi_n(x) at distance ``x`` (m) from the bridge, 1/sqrt(m)."""
+        n = np.arange(1, self.n_modes + 1)
+        length = self.string.length
+        return math.sqrt(2.0 / length) * np.sin(n * math.pi * x / length)
+
+
+def mode_basis(
+    string: StringConstants,
+    sample_rate: float,
+    *,
+    max_modes: int | None = None,
+    max_frequency: float | None = None,
+) -> ModeBasis:
+    """Compute the modes of ``string`` below the Nyquist frequency and their step coefficients.
+
+    Parameters
+    ----------
+    string : StringConstants
+        The string.
+    sample_rate : float, Hz
+        Internal sample rate of the simulation.
+    max_modes : int, optional
+        Keep at most this many modes.
+    max_frequency : float, Hz, optional
+        Keep modes below this frequency (default and upper limit: the Nyquist frequency).
+
+    Returns
+    -------
+    ModeBasis
+    """
+    nyquist = 0.5 * sample_rate
+    limit = nyquist if max_frequency is None else min(max_frequency, nyquist)
+    n_all = np.arange(1, 4096)
+    k = n_all * math.pi / string.length
+    omega_all = np.sqrt((string.tension * k**2 + string.bending_stiffness * k**4)
+                        / string.linear_density)
+    keep = omega_all / (2.0 * math.pi) < limit
+    n_modes = int(np.count_nonzero(keep))
+    if max_modes is not None:
+        n_modes = min(n_modes, int(max_modes))
+    k = k[:n_modes]
+    omega = omega_all[:n_modes]
+    decay = modal_decay_rates(string, omega / (2.0 * math.pi))
+    free, to_disp, to_vel = _exact_step(omega, decay, 1.0 / sample_rate, string.linear_density)
+    bridge = math.sqrt(2.0 / string.length) * (string.tension * k
+                                               + string.bending_stiffness * k**3)
+    return ModeBasis(string, float(sample_rate), omega, decay, free, to_disp, to_vel, bridge)
+
+
+def modal_decay_rates(string: StringConstants, frequency: np.ndarray) -> np.ndarray:
+    """Decay rates r_n = b1 + b2 (f_n / f_1 - 1)**2 of modes at ``frequency`` (Hz), 1/s.
+
+    The Vivi paper's r_n = B1 + B2 (n - 1)**2, with the mode number read from the frequency
+    so that string stiffness raises the damping of stretched high modes. Measured on the
+    model: written in absolute frequency instead, the violin G and the low strings of viola
+    and cello never reached Helmholtz motion (too little damping per period).
+    """
+    first = frequency[0] if frequency.size else 1.0
+    rates = string.damping_b1 + string.damping_b2 * ((frequency - first) / first) ** 2
+    # Keep every mode under-damped (the exact step needs w0 > r): at most Q = 1.
+    return np.minimum(rates, np.pi * frequency)
+
+
+def _exact_step(omega: np.ndarray, decay: np.ndarray, step: float, linear_density: float):
+    """Exact step of a'' + 2 r a' + w0**2 a = f / rho_L over ``step`` s, f held constant."""
+    wd = np.sqrt(omega**2 - decay**2)
+    e = np.exp(-decay * step)
+    c, s = np.cos(wd * step), np.sin(wd * step)
+    c_aa = e * (c + decay * s / wd)
+    c_av = e * s / wd
+    c_va = -e * (wd + decay**2 / wd) * s
+    c_vv = e * (c - decay * s / wd)
+    static = 1.0 / (linear_density * omega**2)
+    return np.stack([c_aa, c_av, c_va, c_vv]), (1.0 - c_aa) * static, -c_va * static
+
+
+@dataclass(frozen=True)
+class ContactCoefficients:
+    """Coefficients of the bow and finger contacts for one (beta, finger) setting.
+
+    ``push_*`` arrays fold the previous sample's contact forces into the next free step
+    (the kernel stores modal states without the last forces applied); ``shape_*`` read the
+    string at the contacts; the scalar gains solve bow and finger forces jointly.
+    """
+
+    shape_bow: np.ndarray
+    shape_finger: np.ndarray
+    push_bow: np.ndarray  # (2, n_modes): into a and v
+    push_finger: np.ndarray  # (2, n_modes)
+    gains: np.ndarray  # (8,) see contact_coefficients
+    fingered: bool
+
+
+def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float) -> ContactCoefficients:
+    """Precompute the bow and finger contact coefficients.
+
+    Parameters
+    ----------
+    basis : ModeBasis
+        Modes of the string.
+    beta : float
+        Bow-bridge distance / effective string length, 0 < beta < 0.5.
+    finger_ratio : float
+        Fraction of the string length removed by the finger (0 = open string).
+
+    Returns
+    -------
+    ContactCoefficients
+        ``gains`` holds ``[H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge_per_Fb, bridge_per_Ff]``:
+        end-of-step bow-point velocity per bow force (H_bb) and per finger force (H_bf), finger
+        displacement (G) and velocity (H) per finger and bow force, and the bridge force per
+        unit bow and finger force.
+    """
+    length = basis.string.length
+    effective = length * (1.0 - finger_ratio)
+    phi_b = basis.shape(beta * effective)
+    fingered = finger_ratio > 0.0
+    phi_f = basis.shape(effective) if fingered else np.zeros_like(phi_b)
+    g, h = basis.force_to_displacement, basis.force_to_velocity
+    c_aa, c_av, c_va, c_vv = basis.free
+    push_b = np.stack([(c_aa * g + c_av * h) * phi_b, (c_va * g + c_vv * h) * phi_b])
+    push_f = np.stack([(c_aa * g + c_av * h) * phi_f, (c_va * g + c_vv * h) * phi_f])
+    gains = np.array([
+        np.sum(phi_b * phi_b * h), np.sum(phi_b * phi_f * h),
+        np.sum(phi_f * phi_f * g), np.sum(phi_f * phi_b * g),
+        np.sum(phi_f * phi_f * h), np.sum(phi_f * phi_b * h),
+        np.sum(basis.bridge_gain * g * phi_b), np.sum(basis.bridge_gain * g * phi_f),
+    ])
+    return ContactCoefficients(phi_b, phi_f, push_b, push_f, gains, fingered)
+
+
+def pack_coefficients(basis: ModeBasis, contact: ContactCoefficients) -> np.ndarray:
+    """Stack the per-mode coefficients in the row order the kernel reads.
+
+    Returns
+    -------
+    np.ndarray [shape=(11, n_modes)]
+        Rows: free step (4), bow push (2), finger push (2), bow shape, finger shape, bridge gain.
+    """
+    return np.ascontiguousarray(np.vstack([
+        basis.free, contact.push_bow, contact.push_finger,
+        contact.shape_bow[None], contact.shape_finger[None], basis.bridge_gain[None],
+    ]))

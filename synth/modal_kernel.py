@@ -1,0 +1,122 @@
+"""The sample loop of the modal bowed string (numba), over plain arrays only.
+
+Everything physical is turned into coefficients by :mod:`synth.modal` before this runs.
+The slow numpy twin used to check it lives in ``tests/naive_modal.py``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: Contact states written per sample.
+CONTACT_NONE, CONTACT_STICK, CONTACT_SLIP = 0, 1, 2
+#: Contact modes read per sample.
+MODE_LIFTED, MODE_BOW, MODE_GRIP = 0, 1, 2
+
+# Reassociation lets LLVM vectorise the modal sums; results stay deterministic for a given
+# build and machine.
+_FAST = {"reassoc", "contract", "nsz", "arcp"}
+
+
+#: Rows of the packed per-mode coefficient array (see :func:`synth.modal.pack_coefficients`).
+ROW_AA, ROW_AV, ROW_VA, ROW_VV, ROW_PUSH_A_BOW, ROW_PUSH_V_BOW = 0, 1, 2, 3, 4, 5
+ROW_PUSH_A_FINGER, ROW_PUSH_V_FINGER, ROW_SHAPE_BOW, ROW_SHAPE_FINGER, ROW_BRIDGE = 6, 7, 8, 9, 10
+N_ROWS = 11
+
+
+@njit(cache=True, fastmath=_FAST)
+def advance_string(modal_state, last_forces, coefficients, gains, finger_spring, friction,
+                   fingered, bow_velocity, bow_force, contact_mode, noise,
+                   out_bridge, out_slip_velocity, out_contact):  # pragma: no cover - numba
+    """Advance one string by ``bow_velocity.size`` samples; see :mod:`synth.modal`.
+
+    ``modal_state`` [shape=(2, n_modes)] holds modal displacements (m) and velocities (m/s)
+    and ``last_forces`` the bow and finger forces (N) of the previous sample; both are
+    updated in place. The states exclude ``last_forces``, which the next free step folds in
+    through the push rows of ``coefficients`` [shape=(N_ROWS, n_modes)].
+    ``gains`` = (H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge per bow force, bridge per finger
+    force), ``friction`` = (mu_s, mu_d, v0 m/s, noise depth), ``finger_spring`` = (K N/m,
+    R N s/m). Writes bridge force (N), slip velocity (m/s) and contact state per sample.
+    """
+    modal_a = modal_state[0]
+    modal_v = modal_state[1]
+    n_modes = modal_a.size
+    c_aa, c_av, c_va, c_vv = coefficients[0], coefficients[1], coefficients[2], coefficients[3]
+    pa_b, pv_b, pa_f, pv_f = coefficients[4], coefficients[5], coefficients[6], coefficients[7]
+    shape_b, shape_f, bridge_gain = coefficients[8], coefficients[9], coefficients[10]
+    h_bb, h_bf, g_ff, g_fb, h_ff, h_fb, br_b, br_f = (
+        gains[0], gains[1], gains[2], gains[3], gains[4], gains[5], gains[6], gains[7])
+    stiffness, damping = finger_spring[0], finger_spring[1]
+    mu_s, mu_d, v0_nominal, noise_depth = friction[0], friction[1], friction[2], friction[3]
+    f_bow, f_finger = last_forces[0], last_forces[1]
+    # The finger force is linear in the bow force, f_finger = p + q f_bow, with q constant;
+    # so is the bow-point admittance (end-of-step velocity per bow force, s/kg).
+    finger_gain = 1.0 / (1.0 + stiffness * g_ff + damping * h_ff)
+    q = -(stiffness * g_fb + damping * h_fb) * finger_gain if fingered else 0.0
+    admittance = h_bb + h_bf * q
+    inverse_admittance = 1.0 / admittance
+    for t in range(bow_velocity.size):
+        v_bow_point = 0.0
+        bridge = 0.0
+        p = 0.0
+        if fingered:
+            y_finger = 0.0
+            v_finger = 0.0
+            for n in range(n_modes):
+                a = modal_a[n]
+                v = modal_v[n]
+                a_new = c_aa[n] * a + c_av[n] * v + pa_b[n] * f_bow + pa_f[n] * f_finger
+                v_new = c_va[n] * a + c_vv[n] * v + pv_b[n] * f_bow + pv_f[n] * f_finger
+                modal_a[n] = a_new
+                modal_v[n] = v_new
+                v_bow_point += shape_b[n] * v_new
+                y_finger += shape_f[n] * a_new
+                v_finger += shape_f[n] * v_new
+                bridge += bridge_gain[n] * a_new
+            p = -(stiffness * y_finger + damping * v_finger) * finger_gain
+        else:
+            for n in range(n_modes):
+                a = modal_a[n]
+                v = modal_v[n]
+                a_new = c_aa[n] * a + c_av[n] * v + pa_b[n] * f_bow
+                v_new = c_va[n] * a + c_vv[n] * v + pv_b[n] * f_bow
+                modal_a[n] = a_new
+                modal_v[n] = v_new
+                v_bow_point += shape_b[n] * v_new
+                bridge += bridge_gain[n] * a_new
+        v_free = v_bow_point + h_bf * p
+        mode = contact_mode[t]
+        slip = 0.0
+        if mode == MODE_LIFTED:
+            f_bow = 0.0
+            out_contact[t] = CONTACT_NONE
+        else:
+            dv = bow_velocity[t] - v_free
+            f_stick = dv * inverse_admittance
+            normal = bow_force[t]
+            if mode == MODE_GRIP or abs(f_stick) <= mu_s * normal:
+                f_bow = f_stick
+                out_contact[t] = CONTACT_STICK
+            else:
+                # Hyperbolic friction, solved in closed form for the slip speed.
+                v0 = v0_nominal * (1.0 - noise_depth * noise[t])
+                d = abs(dv)
+                b = v0 - d + admittance * normal * mu_d
+                c = -v0 * (d - admittance * normal * mu_s)
+                slip = 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
+                mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
+                f_bow = math.copysign(normal * mu, dv)
+                out_contact[t] = CONTACT_SLIP
+        f_finger = p + q * f_bow
+        out_bridge[t] = bridge + br_b * f_bow + br_f * f_finger
+        out_slip_velocity[t] = slip
+    last_forces[0] = f_bow
+    last_forces[1] = f_finger
+
+
+def empty_outputs(n_samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Allocate (bridge force, slip velocity, contact state) arrays for ``n_samples``."""
+    return (np.empty(n_samples), np.empty(n_samples), np.empty(n_samples, dtype=np.int8))

@@ -1,0 +1,174 @@
+"""Play a whole actions table on an instrument: actions -> audio (and diagnostics).
+
+Rows are control frames per string; continuous columns are interpolated linearly between
+rows of the same string (at a repeated time the later row wins, so steps are exact). A
+string is bowed from its first row to its last and where ``bow_force > 0``; after its last
+row the bow is lifted and the string rings on. ``pluck`` rows start a pluck.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from data_schemas.actions import validate_actions
+from data_schemas.errors import ParameterError
+from synth.instrument import SUB_BLOCK, Instrument, StringInput
+from synth.modal_kernel import MODE_BOW, MODE_LIFTED
+
+#: Output samples rendered per step (a multiple of SUB_BLOCK); ~93 ms at 44.1 kHz.
+CHUNK = 4096
+#: Ring-out after the last row, s.
+DEFAULT_TAIL = 1.0
+#: Diagnostics hop in output samples (the listening loop's control rate).
+DIAGNOSTICS_HOP = 256
+
+
+@dataclass(frozen=True)
+class _StringTrack:
+    """The rows of one string as arrays, for interpolation."""
+
+    time: np.ndarray
+    bow_velocity: np.ndarray
+    bow_force: np.ndarray
+    beta: np.ndarray
+    finger_ratio: np.ndarray
+    pluck_times: np.ndarray
+
+    @classmethod
+    def from_rows(cls, rows: pd.DataFrame) -> _StringTrack:
+        return cls(*(rows[c].to_numpy(np.float64) for c in
+                     ("time", "bow_velocity", "bow_force", "beta", "finger_ratio")),
+                   rows.loc[rows["pluck"], "time"].to_numpy(np.float64))
+
+    def sample(self, column: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """Linear interpolation of ``column`` at times ``t`` (later row wins at ties)."""
+        i = np.clip(np.searchsorted(self.time, t, side="right") - 1, 0, self.time.size - 1)
+        j = np.minimum(i + 1, self.time.size - 1)
+        span = self.time[j] - self.time[i]
+        frac = np.where(span > 0, (t - self.time[i]) / np.where(span > 0, span, 1.0), 0.0)
+        frac = np.clip(frac, 0.0, 1.0)
+        return column[i] + frac * (column[j] - column[i])
+
+    def inputs(self, start: int, n_out: int, inst: Instrument) -> StringInput:
+        """Controls for output samples ``start .. start + n_out``."""
+        os_ = inst.oversample
+        t_int = (start * os_ + np.arange(n_out * os_)) / inst.internal_rate
+        t_sub = (start + np.arange(0, n_out, SUB_BLOCK)) / inst.sample_rate
+        velocity = self.sample(self.bow_velocity, t_int)
+        force = self.sample(self.bow_force, t_int)
+        bowing = (t_int >= self.time[0]) & (t_int <= self.time[-1]) & (force > 0.0)
+        mode = np.where(bowing, MODE_BOW, MODE_LIFTED).astype(np.int8)
+        lo = start / inst.sample_rate
+        hi = (start + n_out) / inst.sample_rate
+        plucks = self.pluck_times[(self.pluck_times >= lo) & (self.pluck_times < hi)]
+        offsets = tuple(int(round((p - lo) * inst.internal_rate)) for p in plucks)
+        return StringInput(velocity, force, mode, self.sample(self.beta, t_sub),
+                           self.sample(self.finger_ratio, t_sub), offsets)
+
+
+def render_actions(
+    actions: pd.DataFrame,
+    *,
+    instrument: str | Instrument = "violin",
+    sample_rate: int = 44100,
+    seed: int = 0,
+    oversample: int | None = None,
+    body: str | os.PathLike | np.ndarray | None = "synthesized",
+    tail: float = DEFAULT_TAIL,
+    progress: bool = False,
+) -> np.ndarray:
+    """Render an actions table to mono audio.
+
+    Parameters
+    ----------
+    actions : pandas.DataFrame
+        An actions table (validated here; see :data:`data_schemas.ACTIONS`).
+    instrument : {"violin", "viola", "cello"} or Instrument
+        The instrument (a fresh one is built from the name, seed and settings).
+    sample_rate : {44100, 48000}, Hz
+    seed : int
+        Seed of the friction noise; the same actions and seed give identical audio.
+    oversample : {1, 2, 4}, optional
+    body : "synthesized", path-like, np.ndarray or None
+    tail : float, s
+        Ring-out rendered after the last row.
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    np.ndarray [shape=(n,)], float32
+    """
+    return render_with_diagnostics(actions, instrument=instrument, sample_rate=sample_rate,
+                                   seed=seed, oversample=oversample, body=body, tail=tail,
+                                   progress=progress, diagnostics=False)[0]
+
+
+def render_with_diagnostics(
+    actions: pd.DataFrame,
+    *,
+    instrument: str | Instrument = "violin",
+    sample_rate: int = 44100,
+    seed: int = 0,
+    oversample: int | None = None,
+    body: str | os.PathLike | np.ndarray | None = "synthesized",
+    tail: float = DEFAULT_TAIL,
+    progress: bool = False,
+    diagnostics: bool = True,
+) -> tuple[np.ndarray, pd.DataFrame | None]:
+    """Render like :func:`render_actions` and also return per-hop contact diagnostics.
+
+    Returns
+    -------
+    audio : np.ndarray [shape=(n,)], float32
+    diagnostics : pandas.DataFrame or None
+        One row per hop of 256 samples per excited string (table
+        :data:`data_schemas.CONTACT_DIAGNOSTICS`), or None when not asked for.
+    """
+    from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
+
+    actions = validate_actions(actions)
+    inst = instrument if isinstance(instrument, Instrument) else Instrument(
+        instrument, sample_rate=sample_rate, seed=seed, oversample=oversample, body=body)
+    strings = actions["string"].to_numpy()
+    if np.any(strings >= inst.n_strings):
+        row = int(np.flatnonzero(strings >= inst.n_strings)[0])
+        raise ParameterError(f"actions: column 'string', row {row}: the {inst.name} has "
+                             f"strings 0..{inst.n_strings - 1}")
+    tracks = {int(s): _StringTrack.from_rows(rows)
+              for s, rows in actions.groupby("string", sort=True)}
+    end = (float(actions["time"].max()) if len(actions) else 0.0) + tail
+    n_total = int(np.ceil(end * inst.sample_rate / SUB_BLOCK)) * SUB_BLOCK
+    hop = DIAGNOSTICS_HOP if diagnostics else None
+    audio, rows = [], []
+    bar = tqdm(total=round(n_total / inst.sample_rate, 2), unit="s audio", disable=not progress)
+    start = 0
+    while start < n_total:
+        n_out = min(CHUNK, n_total - start)
+        block = inst._run(n_out, {s: tr.inputs(start, n_out, inst) for s, tr in tracks.items()},
+                          hop=hop)
+        audio.append(block.audio)
+        if diagnostics:
+            rows.extend(_diagnostic_rows(start / inst.sample_rate, inst.sample_rate,
+                                         block.hop_diagnostics))
+        bar.update(round(n_out / inst.sample_rate, 2))
+        start += n_out
+    bar.close()
+    table = pd.DataFrame(rows, columns=CONTACT_DIAGNOSTICS.column_names) if diagnostics else None
+    return np.concatenate(audio) if audio else np.zeros(0, np.float32), table
+
+
+def _diagnostic_rows(start: float, sample_rate: int, per_hop: dict) -> list[tuple]:
+    rows = []
+    for s, hops in per_hop.items():
+        for k, d in enumerate(hops):
+            period = d.sounding_period if np.isfinite(d.sounding_period) else None
+            rows.append((start + k * DIAGNOSTICS_HOP / sample_rate, s, d.slip_onsets,
+                         d.slipping_share, d.contact_share, d.mean_slip_speed, period))
+    rows.sort(key=lambda r: (r[0], r[1]))
+    return rows

@@ -1,0 +1,161 @@
+"""Instrument and string constants, kept as data (``synth/config/strings.toml``).
+
+The TOML file records where each number comes from. :func:`load_instrument` returns plain
+frozen dataclasses in SI units; open strings are tuned to their nominal pitch on load
+(by default so that the bowed string sounds it, as a player tunes).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, replace
+from functools import cache
+from importlib import resources
+from pathlib import Path
+
+from data_schemas.errors import ParameterError
+
+INSTRUMENT_NAMES = ("violin", "viola", "cello")
+
+
+@dataclass(frozen=True)
+class StringConstants:
+    """Physical constants of one string, SI units.
+
+    Attributes
+    ----------
+    name : str
+        Letter name of the open string (``"G"``).
+    midi_pitch : int
+        Nominal pitch of the open string.
+    tension : float, N
+    length : float, m
+        Speaking length, bridge to nut.
+    diameter : float, m
+    linear_density : float, kg/m
+    youngs_modulus : float, Pa
+    mu_s, mu_d : float
+        Static and dynamic friction coefficients of the hyperbolic friction curve.
+    v0 : float, m/s
+        Velocity scale of the friction curve.
+    damping_b1, damping_b2 : float, 1/s
+        Modal decay rates ``r_n = b1 + b2 (f_n / f_1 - 1)**2``.
+    finger_stiffness : float, N/m
+    finger_damping : float, N s/m
+    reference_force : float, N
+        Middle of the model's Helmholtz force range at beta 0.1 and 0.3 m/s.
+    bowed_pitch_offset_cents : float, cents
+        How far the bowed open string sounds above its first mode.
+    """
+
+    name: str
+    midi_pitch: int
+    tension: float
+    length: float
+    diameter: float
+    linear_density: float
+    youngs_modulus: float
+    mu_s: float
+    mu_d: float
+    v0: float
+    damping_b1: float
+    damping_b2: float
+    finger_stiffness: float
+    finger_damping: float
+    reference_force: float = 1.0
+    bowed_pitch_offset_cents: float = 0.0
+
+    @property
+    def bending_stiffness(self) -> float:
+        """EI = E pi d**4 / 64, N m**2."""
+        return self.youngs_modulus * math.pi * self.diameter**4 / 64.0
+
+    @property
+    def impedance(self) -> float:
+        """Characteristic impedance Z0 = sqrt(T rho_L), kg/s."""
+        return math.sqrt(self.tension * self.linear_density)
+
+    def mode_frequency(self, n: int) -> float:
+        """Frequency of mode ``n`` (1-based) of the open string with stiffness, Hz."""
+        k = n * math.pi / self.length
+        w2 = (self.tension * k**2 + self.bending_stiffness * k**4) / self.linear_density
+        return math.sqrt(w2) / (2.0 * math.pi)
+
+    def nominal_frequency(self, tuning_a4: float = 440.0) -> float:
+        """Equal-tempered frequency of :attr:`midi_pitch`, Hz."""
+        return tuning_a4 * 2.0 ** ((self.midi_pitch - 69) / 12.0)
+
+
+@dataclass(frozen=True)
+class InstrumentConstants:
+    """An instrument: its strings (lowest first), bow length and body size."""
+
+    name: str
+    strings: tuple[StringConstants, ...]
+    bow_hair_length: float
+    body_scale: float
+    tuning_a4: float
+
+
+def tuned(string: StringConstants, frequency: float) -> StringConstants:
+    """Return ``string`` with the tension that puts its first mode at ``frequency`` (Hz)."""
+    k = math.pi / string.length
+    w = 2.0 * math.pi * frequency
+    tension = (string.linear_density * w**2 - string.bending_stiffness * k**4) / k**2
+    return replace(string, tension=tension)
+
+
+def _config_path() -> Path:
+    return Path(str(resources.files("synth") / "config" / "strings.toml"))
+
+
+TUNINGS = ("bowed", "first_mode", "published")
+
+
+@cache
+def _load_all(path: str, tuning: str) -> dict[str, InstrumentConstants]:
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    defaults = data.get("defaults", {})
+    tuning_a4 = float(defaults.get("tuning_a4", 440.0))
+    per_string = {k: defaults[k] for k in
+                  ("finger_stiffness", "finger_damping", "damping_b1", "damping_b2")}
+    out = {}
+    for inst in data["instrument"]:
+        strings = []
+        for entry in inst["strings"]:
+            string = StringConstants(**{**per_string, **entry})
+            if tuning != "published":
+                offset = string.bowed_pitch_offset_cents if tuning == "bowed" else 0.0
+                string = tuned(string, string.nominal_frequency(tuning_a4)
+                               * 2.0 ** (-offset / 1200.0))
+            strings.append(string)
+        out[inst["name"]] = InstrumentConstants(
+            name=inst["name"], strings=tuple(strings),
+            bow_hair_length=float(inst["bow_hair_length"]),
+            body_scale=float(inst["body_scale"]), tuning_a4=tuning_a4,
+        )
+    return out
+
+
+def load_instrument(name: str, config: str | Path | None = None, *,
+                    tuning: str = "bowed") -> InstrumentConstants:
+    """Return the constants of instrument ``name`` (violin, viola or cello).
+
+    Parameters
+    ----------
+    name : str
+        Instrument name.
+    config : path-like, optional
+        A TOML file in the format of ``synth/config/strings.toml`` to use instead.
+    tuning : {"bowed", "first_mode", "published"}
+        How open strings are tuned: so that the bowed string sounds its nominal pitch
+        (default, as a player tunes), so that the first mode does, or not at all.
+    """
+    if tuning not in TUNINGS:
+        raise ParameterError(f"tuning={tuning!r} is unknown; choose one of {TUNINGS}")
+    table = _load_all(str(config or _config_path()), tuning)
+    if name not in table:
+        raise ParameterError(f"instrument={name!r} is unknown; choose one of {sorted(table)}")
+    return table[name]

@@ -1,0 +1,113 @@
+"""One simulated string: modal state, cached contact coefficients, and the kernel call."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from synth.modal import ModeBasis, contact_coefficients, mode_basis, pack_coefficients
+from synth.modal_kernel import advance_string
+from synth.strings import StringConstants
+
+#: Resolution of beta and finger_ratio at which contact coefficients are recomputed.
+BETA_RESOLUTION = 1e-4
+FINGER_RESOLUTION = 1e-5
+_CACHE_SIZE = 256
+
+
+@dataclass
+class StringOutput:
+    """Per-sample output of one string over a run of internal samples.
+
+    Attributes
+    ----------
+    bridge_force : np.ndarray [shape=(n,)], N
+    slip_velocity : np.ndarray [shape=(n,)], m/s
+        |v_bow - v_string| while slipping, else 0.
+    contact : np.ndarray [shape=(n,)], int8
+        0 = bow off the string, 1 = sticking, 2 = slipping.
+    """
+
+    bridge_force: np.ndarray
+    slip_velocity: np.ndarray
+    contact: np.ndarray
+
+
+class StringVoice:
+    """A string of the instrument, advanced run by run at the internal sample rate.
+
+    Parameters
+    ----------
+    string : StringConstants
+    internal_rate : float, Hz
+    rng : numpy.random.Generator
+        Source of the friction noise.
+    friction_noise : float
+        Depth of the multiplicative noise on v0: v0 (1 - depth u), u ~ U(0, 1).
+    max_modes : int, optional
+        Cap on the number of modes (default: every mode below the Nyquist frequency).
+    max_mode_frequency : float, Hz, optional
+        Keep only modes below this frequency (never above the Nyquist frequency).
+    """
+
+    def __init__(self, string: StringConstants, internal_rate: float, rng: np.random.Generator,
+                 *, friction_noise: float = 0.02, max_modes: int | None = None,
+                 max_mode_frequency: float | None = None) -> None:
+        self.string = string
+        self.internal_rate = float(internal_rate)
+        self.basis: ModeBasis = mode_basis(string, internal_rate, max_modes=max_modes,
+                                           max_frequency=max_mode_frequency)
+        self.rng = rng
+        self.state = np.zeros((2, self.basis.n_modes))
+        self.last_forces = np.zeros(2)
+        self.friction = np.array([string.mu_s, string.mu_d, string.v0, friction_noise])
+        self.finger_spring = np.array([string.finger_stiffness, string.finger_damping])
+        self._cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, bool]] = {}
+        self.excited = False
+
+    def reset(self) -> None:
+        """Bring the string to rest."""
+        self.state[:] = 0.0
+        self.last_forces[:] = 0.0
+        self.excited = False
+
+    def coefficients(self, beta: float, finger_ratio: float):
+        """Packed kernel coefficients, contact gains and finger flag for a contact setting."""
+        key = (round(beta / BETA_RESOLUTION), round(finger_ratio / FINGER_RESOLUTION))
+        hit = self._cache.get(key)
+        if hit is None:
+            if len(self._cache) >= _CACHE_SIZE:
+                self._cache.clear()
+            contact = contact_coefficients(self.basis, key[0] * BETA_RESOLUTION,
+                                           key[1] * FINGER_RESOLUTION)
+            hit = (pack_coefficients(self.basis, contact), contact.gains, contact.fingered)
+            self._cache[key] = hit
+        return hit
+
+    def advance(self, bow_velocity: np.ndarray, bow_force: np.ndarray, contact_mode: np.ndarray,
+                beta: float, finger_ratio: float, out: StringOutput) -> None:
+        """Advance by ``bow_velocity.size`` samples at fixed beta and finger, writing ``out``.
+
+        Parameters
+        ----------
+        bow_velocity : np.ndarray [shape=(n,)], m/s
+        bow_force : np.ndarray [shape=(n,)], N
+        contact_mode : np.ndarray [shape=(n,)], int8
+            0 = bow lifted, 1 = bowing with friction, 2 = grip (pluck pull, no slipping).
+        beta : float
+        finger_ratio : float
+        out : StringOutput
+            Views of length n to write into.
+        """
+        if not self.excited and not contact_mode.any():
+            out.bridge_force[:] = 0.0
+            out.slip_velocity[:] = 0.0
+            out.contact[:] = 0
+            return
+        self.excited = True
+        packed, gains, fingered = self.coefficients(beta, finger_ratio)
+        noise = self.rng.random(bow_velocity.size)
+        advance_string(self.state, self.last_forces, packed, gains, self.finger_spring,
+                       self.friction, fingered, bow_velocity, bow_force, contact_mode, noise,
+                       out.bridge_force, out.slip_velocity, out.contact)
