@@ -161,12 +161,15 @@ def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
         retake = i == 0 or _retake(strokes[i - 1], s, first, bow["retake_gap"])
         if position is None:
             position = margin if d > 0 else 1.0 - margin
+        span = np.inf
         if first.region is not None:
+            span = bow["region_span"]
             centre = regions[first.region]
-            position = float(np.clip(centre - d * s.travel / 2, margin, 1.0 - margin))
+            half = min(s.travel, span) / 2
+            position = float(np.clip(centre - d * half, margin, 1.0 - margin))
         elif retake:
             position = _fit_start(position, s.travel, d, margin)
-        avail = (1.0 - margin - position) if d > 0 else (position - margin)
+        avail = min((1.0 - margin - position) if d > 0 else (position - margin), span)
         scale = 1.0
         if i + 1 < len(strokes) and s.travel > 0:
             nxt = strokes[i + 1]

@@ -96,7 +96,8 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
             if not isinstance(value, int | float) or value <= 0:
                 raise ParameterError(f"{source}: instruments.{name}.{key}={value!r} must be > 0")
     _positive(config, "frames", "interval", source, upper=0.1)
-    for key in ("max_acceleration", "min_speed_scale", "max_speed_scale", "retake_gap"):
+    for key in ("max_acceleration", "min_speed_scale", "max_speed_scale", "retake_gap",
+                "region_span"):
         _positive(config, "bow", key, source)
     if not 0 <= config["bow"]["margin"] < 0.5:
         raise ParameterError(f"{source}: bow.margin={config['bow']['margin']!r} must be in "
