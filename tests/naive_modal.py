@@ -1,0 +1,79 @@
+"""Slow, obviously correct numpy twin of synth.modal_kernel.advance_string.
+
+It keeps the true modal state (forces applied at the end of each step) and solves the bow
+and finger forces by writing the end-of-step velocity and displacement out mode by mode.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocity, bow_force,
+                 contact_mode, noise):
+    """Return (bridge force, slip velocity, contact) per sample, like the kernel."""
+    length = basis.string.length
+    effective = length * (1.0 - finger_ratio)
+    phi_b = basis.shape(beta * effective)
+    fingered = finger_ratio > 0
+    phi_f = basis.shape(effective) if fingered else np.zeros_like(phi_b)
+    c_aa, c_av, c_va, c_vv = basis.free
+    g, h = basis.force_to_displacement, basis.force_to_velocity
+    mu_s, mu_d, v0_nominal, depth = friction
+    stiffness, damping = finger_spring
+    a = np.zeros(basis.n_modes)
+    v = np.zeros(basis.n_modes)
+    out = np.zeros(bow_velocity.size), np.zeros(bow_velocity.size), np.zeros(bow_velocity.size,
+                                                                             np.int8)
+    for t in range(bow_velocity.size):
+        a_free = c_aa * a + c_av * v
+        v_free = c_va * a + c_vv * v
+
+        def end_state(f_bow, f_finger, a_free=a_free, v_free=v_free):
+            modal_force = phi_b * f_bow + phi_f * f_finger
+            return a_free + g * modal_force, v_free + h * modal_force
+
+        def finger_force(f_bow):
+            if not fingered:
+                return 0.0
+            # F_f = -K y_f - R y'_f with y_f, y'_f linear in F_f: solve the scalar equation.
+            a0, v0 = end_state(f_bow, 0.0)
+            a1, v1 = end_state(f_bow, 1.0)
+            y0, y1 = phi_f @ a0, phi_f @ a1
+            w0, w1 = phi_f @ v0, phi_f @ v1
+            return -(stiffness * y0 + damping * w0) / (
+                1.0 + stiffness * (y1 - y0) + damping * (w1 - w0))
+
+        def bow_point_velocity(f_bow):
+            return phi_b @ end_state(f_bow, finger_force(f_bow))[1]
+
+        v_unforced = bow_point_velocity(0.0)
+        admittance = bow_point_velocity(1.0) - v_unforced
+        slip = 0.0
+        if contact_mode[t] == 0:
+            f_bow, state = 0.0, 0
+        else:
+            dv = bow_velocity[t] - v_unforced
+            f_stick = dv / admittance
+            if contact_mode[t] == 2 or abs(f_stick) <= mu_s * bow_force[t]:
+                f_bow, state = f_stick, 1
+            else:
+                v0 = v0_nominal * (1.0 - depth * noise[t])
+                fb = bow_force[t]
+                # Solve u = |dv| - A F_b mu(u) for the slip speed by bisection.
+                lo, hi = 0.0, abs(dv)
+                for _ in range(200):
+                    u = 0.5 * (lo + hi)
+                    mu = mu_d + (mu_s - mu_d) * v0 / (v0 + u)
+                    if u - (abs(dv) - admittance * fb * mu) > 0:
+                        hi = u
+                    else:
+                        lo = u
+                slip = 0.5 * (lo + hi)
+                mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
+                f_bow, state = np.sign(dv) * fb * mu, 2
+        a, v = end_state(f_bow, finger_force(f_bow))
+        out[0][t] = basis.bridge_gain @ a
+        out[1][t] = slip
+        out[2][t] = state
+    return out

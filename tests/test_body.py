@@ -1,0 +1,59 @@
+"""Synthesized and loaded body responses."""
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from data_schemas import ParameterError
+from synth.body import BlockConvolver, load_body_ir, synthesize_body_ir
+
+
+def spectrum_db(ir, sr, n=1 << 15):
+    mag = np.abs(np.fft.rfft(ir, n))
+    return np.fft.rfftfreq(n, 1 / sr), 20 * np.log10(mag + 1e-12)
+
+
+def test_violin_body_has_signature_modes_and_rolls_off():
+    sr = 44100
+    ir = synthesize_body_ir(sr, seed=1)
+    assert np.sum(ir**2) == pytest.approx(1.0)
+    f, db = spectrum_db(ir, sr)
+    for mode in (275, 460, 550):
+        band = (f > mode * 0.95) & (f < mode * 1.05)
+        around = (f > mode * 0.7) & (f < mode * 1.4)
+        assert db[band].max() > np.median(db[around]) + 3
+    low = db[(f > 1500) & (f < 3000)].mean()
+    high = db[(f > 9000) & (f < 12000)].mean()
+    assert high < low - 15
+
+
+def test_smaller_scale_moves_modes_down_and_is_seeded():
+    sr = 44100
+    a, b = synthesize_body_ir(sr, seed=1), synthesize_body_ir(sr, seed=1)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, synthesize_body_ir(sr, seed=2))
+    f, cello = spectrum_db(synthesize_body_ir(sr, body_scale=0.45, seed=1), sr)
+    peak = f[(f > 80) & (f < 400)][np.argmax(cello[(f > 80) & (f < 400)])]
+    assert 100 < peak < 300
+
+
+def test_block_convolution_equals_full_convolution():
+    rng = np.random.default_rng(0)
+    ir = rng.normal(size=300)
+    x = rng.normal(size=5000)
+    conv = BlockConvolver(ir)
+    out = np.concatenate([conv.process(x[i:i + 256]) for i in range(0, x.size, 256)])
+    np.testing.assert_allclose(out, np.convolve(x, ir)[: x.size], atol=1e-9)
+
+
+def test_user_wav_is_loaded_resampled_and_bad_files_rejected(tmp_path):
+    ir = synthesize_body_ir(48000, seed=3)
+    path = tmp_path / "body.wav"
+    sf.write(path, np.stack([ir, ir], axis=1), 48000, subtype="FLOAT")
+    loaded = load_body_ir(path, 44100)
+    assert loaded.size == pytest.approx(ir.size * 44100 / 48000, abs=2)
+    assert np.sum(loaded**2) == pytest.approx(1.0)
+    bad = tmp_path / "bad.wav"
+    bad.write_bytes(b"RIFF....")
+    with pytest.raises(ParameterError, match="bad.wav"):
+        load_body_ir(bad, 44100)

@@ -1,0 +1,56 @@
+"""The numba kernel agrees with its slow numpy twin (float64, 2,000 samples)."""
+
+import numpy as np
+import pytest
+
+from synth.modal import contact_coefficients, mode_basis, pack_coefficients
+from synth.modal_kernel import advance_string, empty_outputs
+from synth.strings import load_instrument
+from tests.naive_modal import naive_string
+
+N = 2000
+
+
+def run_kernel(basis, string, beta, finger_ratio, velocity, force, mode, noise):
+    contact = contact_coefficients(basis, beta, finger_ratio)
+    packed = pack_coefficients(basis, contact)
+    state = np.zeros((2, basis.n_modes))
+    forces = np.zeros(2)
+    out = empty_outputs(velocity.size)
+    friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
+    spring = np.array([string.finger_stiffness, string.finger_damping])
+    advance_string(state, forces, packed, contact.gains, spring, friction, contact.fingered,
+                   velocity, force, mode, noise, *out)
+    return out
+
+
+@pytest.mark.parametrize(("string_index", "finger_ratio"), [(1, 0.0), (0, 1 - 2 ** (-7 / 12))])
+def test_kernel_matches_numpy_twin(string_index, finger_ratio):
+    string = load_instrument("violin").strings[string_index]
+    basis = mode_basis(string, 88200.0, max_frequency=20000.0)
+    rng = np.random.default_rng(3)
+    velocity = np.linspace(0.0, 0.4, N)
+    force = np.full(N, string.reference_force)
+    mode = np.ones(N, np.int8)
+    mode[:50] = 0
+    noise = rng.random(N)
+    kernel = run_kernel(basis, string, 0.11, finger_ratio, velocity, force, mode, noise)
+    twin = naive_string(basis, 0.11, finger_ratio,
+                        (string.mu_s, string.mu_d, string.v0, 0.02),
+                        (string.finger_stiffness, string.finger_damping),
+                        velocity, force, mode, noise)
+    assert set(np.unique(kernel[2])) >= {1, 2}, "the run must both stick and slip"
+    np.testing.assert_array_equal(kernel[2], twin[2])
+    scale = np.abs(twin[0]).max()
+    np.testing.assert_allclose(kernel[0], twin[0], rtol=0, atol=1e-9 * max(scale, 1.0))
+    np.testing.assert_allclose(kernel[1], twin[1], rtol=0, atol=1e-9)
+
+
+def test_kernel_is_stable_with_every_mode_below_nyquist():
+    string = load_instrument("violin").strings[3]
+    basis = mode_basis(string, 44100.0)
+    assert basis.omega.max() / (2 * np.pi) < 22050.0
+    n = 20000
+    out = run_kernel(basis, string, 0.05, 0.0, np.full(n, 1.0), np.full(n, 5.0),
+                     np.ones(n, np.int8), np.zeros(n))
+    assert np.all(np.isfinite(out[0]))

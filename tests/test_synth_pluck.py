@@ -1,0 +1,38 @@
+"""A plucked string decays as its damping predicts."""
+
+import numpy as np
+import pandas as pd
+import scipy.signal
+
+from synth import render_actions
+from synth.strings import load_instrument
+
+
+def pluck_actions(string):
+    return pd.DataFrame({
+        "time": [0.0, 0.01], "string": [string, string], "finger_ratio": [0.0, 0.0],
+        "bow_force": [0.0, 0.0], "bow_velocity": [0.0, 0.0], "beta": [0.2, 0.2],
+        "bow_position": [0.5, 0.5], "pluck": [True, False]})
+
+
+def test_plucked_fundamental_t60_within_20_percent_of_damping():
+    string_index = 1
+    string = load_instrument("violin").strings[string_index]
+    sr = 44100
+    audio = render_actions(pluck_actions(string_index), body=None, tail=2.5).astype(float)
+    f1 = string.mode_frequency(1)
+    sos = scipy.signal.butter(4, [f1 * 0.8, f1 * 1.2], btype="bandpass", fs=sr, output="sos")
+    band = scipy.signal.sosfiltfilt(sos, audio)
+    frames = band[int(0.3 * sr): int(0.3 * sr) + 40 * 2205].reshape(-1, 2205)
+    level_db = 10 * np.log10(np.mean(frames**2, axis=1))
+    t = (np.arange(level_db.size) + 0.5) * 2205 / sr
+    slope = np.polyfit(t, level_db, 1)[0]  # dB/s
+    measured_t60 = -60.0 / slope
+    predicted_t60 = 3 * np.log(10) / string.damping_b1
+    assert abs(measured_t60 / predicted_t60 - 1) < 0.2, (measured_t60, predicted_t60)
+
+
+def test_pluck_is_loud_then_silent_before_pull_ends():
+    audio = render_actions(pluck_actions(3), body=None, tail=1.0)
+    assert np.abs(audio[: int(0.2 * 44100)]).max() > 0.01
+    assert np.all(np.isfinite(audio))
