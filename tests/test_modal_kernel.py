@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
+from naive_modal import naive_string
 
 from synth.modal import contact_coefficients, mode_basis, pack_coefficients
 from synth.modal_kernel import advance_string, empty_outputs
 from synth.strings import load_instrument
-from tests.naive_modal import naive_string
 
 N = 2000
 
