@@ -173,7 +173,28 @@ def read_notes(path: str | os.PathLike) -> pd.DataFrame:
     Nullable integer columns (``slur_id``, ``string_indication``) come back as pandas
     nullable integers (``Int32``, ``Int8``), never as floats.
     """
+    path = Path(path)
+    if path.suffix.lower() == ".csv" and path.is_file():
+        return _to_pandas(_read_csv(path))
     return _to_pandas(read_table(path, NOTES))
+
+
+def _read_csv(path: Path) -> pa.Table:
+    """Read CSV keeping empty text as null only in the nullable text columns."""
+    import pyarrow.csv as pacsv
+
+    try:
+        table = pacsv.read_csv(path, convert_options=pacsv.ConvertOptions(
+            strings_can_be_null=True))
+    except (pa.ArrowInvalid, OSError) as exc:
+        raise SchemaError(f"cannot read: {str(exc).splitlines()[0]}", source=str(path)) from None
+    for i, name in enumerate(table.column_names):
+        if name in NOTES.column_names:
+            col = NOTES.column(name)
+            if pa.types.is_string(col.type) and not col.nullable:
+                filled = table.column(i).cast(pa.string()).fill_null("")
+                table = table.set_column(i, name, filled)
+    return NOTES.conform(table, source=str(path))
 
 
 def validate_notes(notes: pd.DataFrame | pa.Table, source: str = "<notes>") -> pd.DataFrame:

@@ -182,7 +182,8 @@ def choose_strings(notes: pd.DataFrame, instrument: Instrument, *,
                    slur_span: float = 7.0) -> pd.DataFrame:
     """Choose string and finger for every note of one part.
 
-    Rules, in order: a string indication is honoured where the pitch is playable on it; a
+    Rules, in order: a string indication is honoured where the pitch is playable on it
+    (no higher above the open string than the top string's range allows); a
     double stop goes to two adjacent strings (lowest position) or, where that is impossible
     (three or more notes, or no adjacent pair fits), is marked ``rolled``; a slurred group
     stays on one string where all its pitches fit within ``slur_span`` semitones above the
@@ -209,11 +210,12 @@ def choose_strings(notes: pd.DataFrame, instrument: Instrument, *,
     string = np.array([lowest_position_string(p, instrument) for p in pitch], dtype=np.int64)
     fixed = np.zeros(n, bool)
     rolled = np.zeros(n, bool)
+    max_stop = instrument.highest - instrument.open_strings[-1]
 
     indication = notes["string_indication"].to_numpy(dtype=np.float64, na_value=np.nan)
     for i in np.flatnonzero(np.isfinite(indication)):
         s = int(indication[i])
-        if 0 <= s < len(opens) and pitch[i] >= opens[s] - 1e-6:
+        if 0 <= s < len(opens) and 0 <= pitch[i] - opens[s] + 1e-6 <= max_stop + 2e-6:
             string[i] = s
             fixed[i] = True
 

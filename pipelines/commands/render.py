@@ -59,6 +59,8 @@ def _check(args: argparse.Namespace) -> None:
         raise ParameterError(f"--skill {args.skill} must be 0, 1, 2 or 3")
     if args.sample_rate < 8000 or args.sample_rate > 384000:
         raise ParameterError(f"--sample-rate {args.sample_rate} must be in 8000..384000")
+    if args.instrument and args.all_parts:
+        raise ParameterError("--instrument applies to a single part (drop --all-parts)")
     if not (args.output or args.actions or args.plot):
         raise ParameterError("nothing to write: give -o OUT.wav, --actions or --plot")
     if args.output and Path(args.output).suffix.lower() not in (".wav", ".flac"):
