@@ -9,9 +9,9 @@ used. Figures: shared/reference/modal-string.md.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 import scipy.signal
 import soundfile as sf
 
@@ -106,9 +106,11 @@ def load_body_ir(path: str | os.PathLike, sample_rate: int) -> np.ndarray:
     return ir / np.sqrt(energy)
 
 
-@dataclass
 class BlockConvolver:
     """Streaming FIR convolution (overlap-add) of consecutive blocks with a fixed response.
+
+    Each block is convolved by FFT with the response's spectrum, cached per FFT size, so
+    the loop's small blocks and the renderer's large chunks both cost one FFT pair.
 
     Parameters
     ----------
@@ -116,26 +118,34 @@ class BlockConvolver:
         The impulse response.
     """
 
-    response: np.ndarray
-
-    def __post_init__(self) -> None:
+    def __init__(self, response: np.ndarray) -> None:
+        self.response = np.asarray(response, dtype=np.float64)
         self._tail = np.zeros(self.response.size - 1)
+        self._spectra: dict[int, np.ndarray] = {}
 
     def reset(self) -> None:
         """Forget the ringing of earlier blocks."""
         self._tail[:] = 0.0
 
+    def _spectrum(self, n_fft: int) -> np.ndarray:
+        spectrum = self._spectra.get(n_fft)
+        if spectrum is None:
+            spectrum = self._spectra[n_fft] = scipy.fft.rfft(self.response, n_fft)
+        return spectrum
+
     def process(self, block: np.ndarray) -> np.ndarray:
         """Convolve the next ``block`` and return as many output samples as it has."""
         if block.size == 0:
-            return block.copy()
-        if block.size * 8 < self.response.size:
-            full = np.convolve(block, self.response)
-        else:
-            full = scipy.signal.oaconvolve(block, self.response)
+            return np.zeros(0)
+        n_full = block.size + self.response.size - 1
+        n_fft = scipy.fft.next_fast_len(n_full, real=True)
+        spectrum = scipy.fft.rfft(block, n_fft) * self._spectrum(n_fft)
+        full = scipy.fft.irfft(spectrum, n_fft)[:n_full]
         full[: self._tail.size] += self._tail
         out = full[: block.size]
         rest = full[block.size:]
-        self._tail = np.concatenate([rest, np.zeros(self._tail.size - rest.size)])[
-            : self._tail.size]
+        if rest.size >= self._tail.size:
+            self._tail = rest[: self._tail.size].copy()
+        else:
+            self._tail = np.concatenate([rest, np.zeros(self._tail.size - rest.size)])
         return out

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.signal
+from numba import njit
 
 #: Pass band edge (Hz) and stop-band attenuation (dB) of the anti-alias filter.
 PASS_BAND_HZ = 18000.0
@@ -23,48 +24,61 @@ def anti_alias_taps(sample_rate: int, factor: int) -> np.ndarray:
     Returns
     -------
     np.ndarray [shape=(n_taps,)]
-        Kaiser-window taps, pass band up to 18 kHz, stop band from the output Nyquist.
+        Kaiser-window taps: pass band to 18 kHz, >= 80 dB down from the output Nyquist.
     """
     internal = sample_rate * factor
     nyquist_out = 0.5 * sample_rate
-    width = (nyquist_out - min(PASS_BAND_HZ, 0.8 * nyquist_out)) / (0.5 * internal)
+    pass_edge = min(PASS_BAND_HZ, 0.8 * nyquist_out)
+    width = (nyquist_out - pass_edge) / (0.5 * internal)
     n_taps, kaiser_beta = scipy.signal.kaiserord(STOP_BAND_DB, width)
     n_taps |= 1
-    cutoff = 0.5 * (min(PASS_BAND_HZ, 0.8 * nyquist_out) + nyquist_out)
+    cutoff = 0.5 * (pass_edge + nyquist_out)
     return scipy.signal.firwin(n_taps, cutoff, window=("kaiser", kaiser_beta), fs=internal)
+
+
+@njit(cache=True, fastmath={"reassoc", "contract", "nsz", "arcp"})
+def _decimate(extended, taps_reversed, factor, out):  # pragma: no cover - numba
+    """out[k] = sum_j taps[j] extended[k factor + factor - 1 + (n_taps - 1) - j]."""
+    n_taps = taps_reversed.size
+    for k in range(out.size):
+        start = k * factor + factor - 1
+        acc = 0.0
+        for j in range(n_taps):
+            acc += taps_reversed[j] * extended[start + j]
+        out[k] = acc
 
 
 class Decimator:
     """Streaming low-pass + decimation by an integer factor (factor 1 passes through).
 
-    The filter's group delay, ``(n_taps - 1) / 2`` internal samples, is compensated by
-    :attr:`delay` output samples so callers can align audio with controls.
+    Output sample k of a block is the filtered internal sample ``k * factor + factor - 1``.
     """
 
     def __init__(self, sample_rate: int, factor: int) -> None:
         self.factor = int(factor)
         self.taps = anti_alias_taps(sample_rate, factor) if factor > 1 else np.ones(1)
+        self._reversed = np.ascontiguousarray(self.taps[::-1])
         self._history = np.zeros(self.taps.size - 1)
-        self._phase = 0
-
-    @property
-    def delay(self) -> int:
-        """Group delay of the filter in output samples (rounded down)."""
-        return (self.taps.size - 1) // 2 // self.factor
 
     def reset(self) -> None:
         """Clear the filter history."""
         self._history[:] = 0.0
-        self._phase = 0
 
     def process(self, block: np.ndarray) -> np.ndarray:
-        """Filter and decimate the next internal-rate ``block`` (length a multiple of factor)."""
+        """Filter and decimate the next internal-rate ``block`` (length a multiple of factor).
+
+        Parameters
+        ----------
+        block : np.ndarray [shape=(n * factor,)]
+
+        Returns
+        -------
+        np.ndarray [shape=(n,)]
+        """
         if self.factor == 1:
             return block.copy()
         extended = np.concatenate([self._history, block])
-        if block.size > 4 * self.taps.size:
-            filtered = scipy.signal.oaconvolve(extended, self.taps, mode="valid")
-        else:
-            filtered = np.convolve(extended, self.taps, mode="valid")
-        self._history = extended[-(self.taps.size - 1):] if self.taps.size > 1 else self._history
-        return filtered[self.factor - 1:: self.factor]
+        out = np.empty(block.size // self.factor)
+        _decimate(extended, self._reversed, self.factor, out)
+        self._history = extended[extended.size - self._history.size:]
+        return out

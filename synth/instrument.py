@@ -255,8 +255,12 @@ class Instrument:
     # -- shared core -------------------------------------------------------------------
 
     def _run(self, n_samples: int, inputs: Mapping[int, StringInput],
-             *, hop: int | None = None) -> Block:
-        """Advance every excited string by ``n_samples`` output samples under ``inputs``."""
+             *, hop: int | None = None, track: bool = True) -> Block:
+        """Advance every excited string by ``n_samples`` output samples under ``inputs``.
+
+        With ``hop`` (output samples) the diagnostics are also given per hop; with
+        ``track=False`` none are computed (a plain render).
+        """
         n_internal = n_samples * self.oversample
         total = np.zeros(n_internal)
         out = StringOutput(np.empty(n_internal), np.empty(n_internal),
@@ -274,6 +278,8 @@ class Instrument:
             held = self._held[s]
             self._held[s] = BowControl(held.bow_velocity, held.bow_force,
                                        float(given.beta[-1]), float(given.finger_ratio[-1]))
+            if not track:
+                continue
             if hop:
                 per_hop[s] = self._track_hops(s, out, start, hop * self.oversample)
                 diagnostics[s] = merge_diagnostics(per_hop[s])

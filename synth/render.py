@@ -26,6 +26,7 @@ CHUNK = 4096
 DEFAULT_TAIL = 1.0
 #: Diagnostics hop in output samples (the listening loop's control rate).
 DIAGNOSTICS_HOP = 256
+_STEP = 1e-9
 
 
 @dataclass(frozen=True)
@@ -41,18 +42,18 @@ class _StringTrack:
 
     @classmethod
     def from_rows(cls, rows: pd.DataFrame) -> _StringTrack:
-        return cls(*(rows[c].to_numpy(np.float64) for c in
-                     ("time", "bow_velocity", "bow_force", "beta", "finger_ratio")),
+        time = rows["time"].to_numpy(np.float64).copy()
+        # Rows at a repeated time are a step: nudge them apart by a nanosecond (far below a
+        # sample) so that linear interpolation takes the later row from that time on.
+        for i in np.flatnonzero(np.diff(time) <= 0.0) + 1:
+            time[i] = max(time[i], time[i - 1] + _STEP)
+        return cls(time, *(rows[c].to_numpy(np.float64) for c in
+                           ("bow_velocity", "bow_force", "beta", "finger_ratio")),
                    rows.loc[rows["pluck"], "time"].to_numpy(np.float64))
 
     def sample(self, column: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """Linear interpolation of ``column`` at times ``t`` (later row wins at ties)."""
-        i = np.clip(np.searchsorted(self.time, t, side="right") - 1, 0, self.time.size - 1)
-        j = np.minimum(i + 1, self.time.size - 1)
-        span = self.time[j] - self.time[i]
-        frac = np.where(span > 0, (t - self.time[i]) / np.where(span > 0, span, 1.0), 0.0)
-        frac = np.clip(frac, 0.0, 1.0)
-        return column[i] + frac * (column[j] - column[i])
+        """Linear interpolation of ``column`` at times ``t`` (held beyond the ends)."""
+        return np.interp(t, self.time, column)
 
     def inputs(self, start: int, n_out: int, inst: Instrument) -> StringInput:
         """Controls for output samples ``start .. start + n_out``."""
@@ -151,7 +152,7 @@ def render_with_diagnostics(
     while start < n_total:
         n_out = min(CHUNK, n_total - start)
         block = inst._run(n_out, {s: tr.inputs(start, n_out, inst) for s, tr in tracks.items()},
-                          hop=hop)
+                          hop=hop, track=diagnostics)
         audio.append(block.audio)
         if diagnostics:
             rows.extend(_diagnostic_rows(start / inst.sample_rate, inst.sample_rate,
