@@ -27,7 +27,7 @@ ROW_PUSH_A_FINGER, ROW_PUSH_V_FINGER, ROW_SHAPE_BOW, ROW_SHAPE_FINGER, ROW_BRIDG
 N_ROWS = 11
 
 
-@njit(cache=True, fastmath=_FAST)
+@njit(cache=True, fastmath=_FAST, error_model="numpy")
 def advance_string(modal_state, last_forces, coefficients, gains, finger_spring, friction,
                    fingered, bow_velocity, bow_force, contact_mode, noise,
                    out_bridge, out_slip_velocity, out_contact):  # pragma: no cover - numba
