@@ -22,6 +22,7 @@ from pipelines.rules_config import dynamic_table
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
             "bow_position", "pluck")
+_MAX_FINGER = 0.8  # the actions table's limit (about 28 semitones)
 _TICK = 0.0005  # s between a frame and its neighbour that changes finger or lifts the bow
 
 
@@ -310,7 +311,7 @@ def _rows(t: np.ndarray, string: int, semis: float, force: np.ndarray, velocity:
           beta: np.ndarray, pos: np.ndarray, pluck: bool = False) -> dict[str, np.ndarray]:
     n = t.size
     return {"time": t, "string": np.full(n, string, np.int8),
-            "finger_ratio": np.full(n, finger_ratio(semis), np.float32),
+            "finger_ratio": np.full(n, min(finger_ratio(semis), _MAX_FINGER), np.float32),
             "bow_force": np.maximum(force, 0.0), "bow_velocity": velocity, "beta": beta,
             "bow_position": pos, "pluck": np.full(n, pluck)}
 

@@ -251,7 +251,12 @@ def choose_strings(notes: pd.DataFrame, instrument: Instrument, *,
         if fits:
             string[idx] = max(fits)
 
-    semitones = np.maximum(pitch - opens[string], 0.0)
+    semitones = pitch - opens[string]
+    bad = (semitones > max_stop + 1e-6) | (semitones < -1e-6)
+    if bad.any():  # a chord or slur placement that the hand cannot reach: play it plainly
+        string[bad] = [lowest_position_string(p, instrument) for p in pitch[bad]]
+        semitones = pitch - opens[string]
+    semitones = np.maximum(semitones, 0.0)
     return pd.DataFrame({"string": string.astype(np.int8), "semitones": semitones,
                          "rolled": rolled}, index=notes.index)
 
