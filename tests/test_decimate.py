@@ -12,7 +12,7 @@ def test_filter_response(factor):
     taps = anti_alias_taps(44100, factor)
     f, h = scipy.signal.freqz(taps, worN=1 << 14, fs=44100 * factor)
     db = 20 * np.log10(np.abs(h) + 1e-15)
-    assert np.all(np.abs(db[f < 18000]) < 0.01)
+    assert np.all(np.abs(db[f < 18000]) < 0.05)
     if factor == 2:  # half band: what folds back lands above 20 kHz
         assert db[f > 24100].max() < -60
         assert db[f > 25000].max() < -80
@@ -26,7 +26,7 @@ def test_half_band_has_every_other_tap_zero():
     assert taps[centre] == 0.5
     assert np.all(taps[centre + 2::2] == 0)
     assert np.all(taps[centre + 1::2] != 0)
-    assert np.count_nonzero(taps) <= taps.size // 2 + 1
+    assert np.count_nonzero(taps) == (taps.size + 1) // 2 + 1
 
 
 @pytest.mark.parametrize("factor", [1, 2, 4])
