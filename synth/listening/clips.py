@@ -1,0 +1,141 @@
+"""Training clips: one string bowed steadily, left to settle, then recorded and judged.
+
+A clip accelerates the bow to its velocity (at most 5 m/s^2), lets the note settle for
+``settle`` seconds and records the next ``record`` seconds (audio, bridge force, slip onsets).
+:func:`auto_label` is the automatic teacher's judgement of a clip.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from synth.instrument import BowControl, Instrument
+from synth.listening.teacher import (
+    TeacherThresholds,
+    clip_statistics,
+    judge,
+    reference_force,
+)
+from synth.strings import load_instrument
+
+#: Bowing of the mezzo-forte reference (Vivi's mf lane).
+MF_VELOCITY = 0.33
+MF_BETA = 0.10
+MAX_ACCELERATION = 5.0  # m/s^2
+
+
+@dataclass(frozen=True)
+class ClipSpec:
+    """What to play: instrument, string, finger (semitones) and the bowing."""
+
+    instrument: str
+    string: int
+    semitones: float
+    bow_force: float
+    bow_velocity: float
+    beta: float
+
+    @property
+    def finger_ratio(self) -> float:
+        """Fraction of the string length removed by the finger."""
+        return float(1.0 - 2.0 ** (-self.semitones / 12.0))
+
+    def nominal_frequency(self) -> float:
+        """Nominal frequency of the stopped string, Hz."""
+        inst = load_instrument(self.instrument)
+        return inst.strings[self.string].nominal_frequency(inst.tuning_a4) * 2 ** (
+            self.semitones / 12.0)
+
+
+@dataclass(frozen=True)
+class Clip:
+    """A recorded clip.
+
+    Attributes
+    ----------
+    spec : ClipSpec
+    audio : np.ndarray [shape=(n,)], float32
+        The recorded part.
+    bridge_force : np.ndarray [shape=(n,)], N
+    onset_times : np.ndarray [shape=(k,)], s
+        Slip onsets during the recorded part.
+    sample_rate : int, Hz
+    """
+
+    spec: ClipSpec
+    audio: np.ndarray
+    bridge_force: np.ndarray
+    onset_times: np.ndarray
+    sample_rate: int
+
+    @property
+    def duration(self) -> float:
+        """Length of the recorded part, s."""
+        return self.audio.size / self.sample_rate
+
+
+def render_clip(spec: ClipSpec, *, settle: float = 0.7, record: float = 0.3, seed: int = 0,
+                sample_rate: int = 44100, context: float = 0.0) -> Clip:
+    """Play a steady clip and record its end.
+
+    Parameters
+    ----------
+    spec : ClipSpec
+    settle, record : float, s
+        Time left to settle (after the bow has accelerated) and recorded time.
+    seed : int
+        Friction-noise and body seed.
+    sample_rate : int, Hz
+    context : float, s
+        Audio before the recorded part also returned (prepended to ``audio`` only), so that
+        causal features of the first recorded hop have a full window.
+
+    Returns
+    -------
+    Clip
+    """
+    inst = Instrument(spec.instrument, sample_rate=sample_rate, seed=seed)
+    control = BowControl(spec.bow_velocity, spec.bow_force, spec.beta, spec.finger_ratio)
+    ramp = max(int(abs(spec.bow_velocity) / MAX_ACCELERATION * sample_rate), 256)
+    n_settle = max(int(settle * sample_rate) - int(context * sample_rate), 256)
+    inst.process(ramp, {spec.string: control})
+    pre = inst.process(n_settle, {spec.string: control})
+    n_context = int(context * sample_rate)
+    block = inst.process(int(record * sample_rate), {spec.string: control})
+    onsets = block.diagnostics[spec.string].onset_times
+    audio = block.audio
+    if n_context:
+        audio = np.concatenate([pre.audio[-n_context:], audio])
+    return Clip(spec, audio, block.bridge_force, onsets, sample_rate)
+
+
+@lru_cache(maxsize=16)
+def reference_rms(instrument: str, sample_rate: int = 44100) -> float:
+    """RMS of the mezzo-forte reference: the second string bowed at its reference force."""
+    constants = load_instrument(instrument)
+    s = 1
+    force = reference_force(constants.strings[s].reference_force, MF_VELOCITY, MF_BETA)
+    clip = render_clip(ClipSpec(instrument, s, 0.0, force, MF_VELOCITY, MF_BETA),
+                       settle=0.5, record=0.3, sample_rate=sample_rate)
+    return float(np.sqrt(np.mean(clip.audio.astype(np.float64) ** 2)))
+
+
+def auto_label(clip: Clip, *, thresholds: TeacherThresholds | None = None) -> int:
+    """The automatic teacher's class (1..5) of a clip.
+
+    Uses the recorded part's slip onsets, the bridge force's periodicity, the audio level and
+    the bow force relative to the string's reference force for the bowing.
+    """
+    spec = clip.spec
+    n = clip.bridge_force.size
+    audio = clip.audio[-n:]
+    stats = clip_statistics(clip.onset_times, clip.bridge_force, audio,
+                            f0=spec.nominal_frequency(), duration=n / clip.sample_rate,
+                            sample_rate=clip.sample_rate,
+                            reference_rms=reference_rms(spec.instrument, clip.sample_rate))
+    string_ref = load_instrument(spec.instrument).strings[spec.string].reference_force
+    ratio = spec.bow_force / reference_force(string_ref, spec.bow_velocity, spec.beta)
+    return judge(stats, force_ratio=ratio, thresholds=thresholds)
