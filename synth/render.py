@@ -20,8 +20,8 @@ from data_schemas.errors import ParameterError
 from synth.instrument import SUB_BLOCK, Instrument, StringInput
 from synth.modal_kernel import MODE_BOW, MODE_LIFTED
 
-#: Output samples rendered per step (a multiple of SUB_BLOCK); ~93 ms at 44.1 kHz.
-CHUNK = 4096
+#: Output samples rendered per step (a multiple of SUB_BLOCK); ~0.37 s at 44.1 kHz.
+CHUNK = 16384
 #: Ring-out after the last row, s.
 DEFAULT_TAIL = 1.0
 #: Diagnostics hop in output samples (the listening loop's control rate).
