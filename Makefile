@@ -26,7 +26,9 @@ lint: $(STAMP)
 	$(BIN)/ruff check .
 
 bench: $(STAMP) stk
-	$(BIN)/python bench/synth_speed.py --json
+	@for script in bench/synth_speed.py bench/score_speed.py bench/build_db.py; do \
+	  if [ -f $$script ]; then echo "== $$script"; $(BIN)/python $$script --json || exit 1; fi; \
+	done
 
 # STK's Bowed waveguide is the speed peer of bench/synth_speed.py (Debian's libstk-dev).
 stk:
