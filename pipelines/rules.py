@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.actions import validate_actions
-from pipelines.instruments import choose_strings, finger_ratio, fit_range, get_instrument
+from pipelines.instruments import choose_strings, fit_range, get_instrument
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
 _MIN_DURATION = 0.005  # s
@@ -410,8 +410,3 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         "string": [e.strings[-1] for e in events], "dynamic": [e.dynamic for e in events],
     })
     return Performance(validate_actions(actions, source=f"rules ({name})"), table, warnings)
-
-
-def finger_ratios(semitones: list[float]) -> np.ndarray:
-    """Finger ratios of a list of finger positions in semitones."""
-    return finger_ratio(np.asarray(semitones, dtype=np.float64))

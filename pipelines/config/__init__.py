@@ -1,0 +1,1 @@
+"""Package data: TOML settings of the pipelines (rules.toml)."""
