@@ -94,7 +94,9 @@ def read_table(path: str | os.PathLike, spec: TableSpec) -> pa.Table:
             table = pq.read_table(path)
             _check_version(table.schema, spec, str(path))
         elif suffix == ".csv":
-            table = pacsv.read_csv(path)
+            # Empty cells are nulls in every column, text included.
+            table = pacsv.read_csv(path, convert_options=pacsv.ConvertOptions(
+                strings_can_be_null=True, quoted_strings_can_be_null=True))
         else:
             raise SchemaError(f"unsupported file type '{suffix}' (use .parquet or .csv)",
                               source=str(path))

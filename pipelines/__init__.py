@@ -1,0 +1,1 @@
+"""Score reading, performance rules, render/compare/evaluate jobs and the arco CLI."""

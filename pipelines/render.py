@@ -164,14 +164,17 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
 
 
 def mix(signals: list[np.ndarray], peak: float = PEAK) -> np.ndarray:
-    """Sum mono signals of any lengths and normalise the peak.
+    """Sum mono signals of any lengths, attenuating only if the sum would clip.
+
+    The instrument's output level is meaningful (the evaluation compares it with each
+    dynamic's target), so the mix keeps it unless its peak exceeds ``peak``.
 
     Parameters
     ----------
     signals : list of np.ndarray [shape=(n_i,)]
         Audio of each part.
     peak : float
-        Peak of the result (silence stays silent).
+        Largest allowed peak of the result.
 
     Returns
     -------
@@ -182,15 +185,12 @@ def mix(signals: list[np.ndarray], peak: float = PEAK) -> np.ndarray:
     for s in signals:
         out[: s.size] += np.nan_to_num(s.astype(np.float64))
     top = float(np.max(np.abs(out))) if n else 0.0
-    if top > 0:
+    if top > peak:
         out *= peak / top
     return out.astype(np.float32)
 
 
 def _synth():
-    try:
-        from synth import render_actions
-    except ImportError as exc:
-        raise ParameterError(f"the synthesizer is not available ({exc}); use --actions "
-                             "without -o to write the actions only") from None
+    from synth import render_actions
+
     return render_actions
