@@ -46,7 +46,9 @@ ACTIONS = TableSpec(
         Column("bow_position", pa.float64(), "1",
                "Contact point along the bow hair, 0 = frog, 1 = tip.",
                minimum=0.0, maximum=1.0),
-        Column("pluck", pa.bool_(), "", "A pluck (pizzicato) starts at this time on this string."),
+        Column("pluck", pa.bool_(), "",
+               "A pluck (pizzicato) starts at this time on this string; the row's bow_force "
+               "sets its strength (pull of bow_force x 5 mm/N; 0 = 5 mm)."),
     ),
     checks=(non_decreasing("time"),),
 )

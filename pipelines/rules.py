@@ -86,6 +86,25 @@ class Performance:
     warnings: list[str]
 
 
+def string_force_factors(instrument: str) -> np.ndarray:
+    """Per-string multipliers of the dynamic force table, which is written for the violin D.
+
+    Each string's playable window differs (the cello C string needs ~20x the violin D's
+    force); the factors are the instrument model's measured reference forces (middle of
+    each string's Helmholtz range, ``synth/config/strings.toml``) over the violin D's.
+
+    Returns
+    -------
+    np.ndarray [shape=(4,)]
+        Multipliers, lowest string first.
+    """
+    from synth.strings import load_instrument
+
+    reference = load_instrument("violin").strings[1].reference_force
+    return np.array([s.reference_force / reference
+                     for s in load_instrument(instrument).strings])
+
+
 def note_name(midi: float) -> str:
     """Scientific pitch name of a MIDI note, e.g. 69 -> ``A4``."""
     m = int(round(midi))
@@ -403,6 +422,7 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
                         "chord notes cannot be bowed at once and are rolled")
     strokes = bowing.plan(events, config, bow_length=inst_cfg["bow_length"], warnings=warnings)
     actions = bowing.frames(events, strokes, config, force_scale=inst_cfg["force_scale"])
+    actions["bow_force"] *= string_force_factors(name)[actions["string"].to_numpy(int)]
     table = pd.DataFrame({
         "t0": [e.t0 for e in events], "played_end": [e.played_end for e in events],
         "end": [e.end for e in events], "label": [e.label for e in events],

@@ -78,6 +78,9 @@ class StringInput:
         One value per :data:`SUB_BLOCK` output samples.
     pluck_offsets : sequence of int
         Internal-sample offsets in this run where plucks start.
+    pluck_pulls : sequence of float, m
+        How far each pluck pulls the string before letting go (default
+        :data:`PLUCK_DISPLACEMENT`).
     """
 
     bow_velocity: np.ndarray
@@ -86,6 +89,7 @@ class StringInput:
     beta: np.ndarray
     finger_ratio: np.ndarray
     pluck_offsets: tuple[int, ...] = ()
+    pluck_pulls: tuple[float, ...] = ()
 
 
 @dataclass
@@ -306,9 +310,10 @@ class Instrument:
 
     def _apply_plucks(self, s: int, given: StringInput, start: int) -> None:
         """Turn pluck starts and a pluck still pulling into grip samples."""
-        pull = int(round(PLUCK_DISPLACEMENT / PLUCK_SPEED * self.internal_rate))
-        for offset in given.pluck_offsets:
-            self._grip_until[s] = start + offset + pull
+        pulls = given.pluck_pulls or (PLUCK_DISPLACEMENT,) * len(given.pluck_offsets)
+        for offset, pull in zip(given.pluck_offsets, pulls, strict=True):
+            self._grip_until[s] = start + offset + int(round(
+                pull / PLUCK_SPEED * self.internal_rate))
         n = given.contact_mode.size
         grip_end = min(self._grip_until[s] - start, n)
         if grip_end <= 0:

@@ -3,7 +3,9 @@
 Rows are control frames per string; continuous columns are interpolated linearly between
 rows of the same string (at a repeated time the later row wins, so steps are exact). A
 string is bowed from its first row to its last and where ``bow_force > 0``; after its last
-row the bow is lifted and the string rings on. ``pluck`` rows start a pluck.
+row the bow is lifted and the string rings on. ``pluck`` rows start a pluck whose strength
+is the row's ``bow_force``: the string is pulled ``bow_force`` x 5 mm/N before it is let go
+(0 N: the default 5 mm).
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from tqdm import tqdm
 
 from data_schemas.actions import validate_actions
 from data_schemas.errors import ParameterError
-from synth.instrument import SUB_BLOCK, Instrument, StringInput
+from synth.instrument import PLUCK_DISPLACEMENT, SUB_BLOCK, Instrument, StringInput
 from synth.modal_kernel import MODE_BOW, MODE_LIFTED
 
 #: Output samples rendered per step (a multiple of SUB_BLOCK); ~0.37 s at 44.1 kHz.
@@ -27,6 +29,8 @@ DEFAULT_TAIL = 1.0
 #: Diagnostics hop in output samples (the listening loop's control rate).
 DIAGNOSTICS_HOP = 256
 _STEP = 1e-9
+#: A pluck row's bow_force at which the pull is PLUCK_DISPLACEMENT, N.
+PLUCK_REFERENCE_FORCE = 1.0
 
 
 @dataclass(frozen=True)
@@ -39,6 +43,7 @@ class _StringTrack:
     beta: np.ndarray
     finger_ratio: np.ndarray
     pluck_times: np.ndarray
+    pluck_forces: np.ndarray
 
     @classmethod
     def from_rows(cls, rows: pd.DataFrame) -> _StringTrack:
@@ -49,7 +54,8 @@ class _StringTrack:
             time[i] = max(time[i], time[i - 1] + _STEP)
         return cls(time, *(rows[c].to_numpy(np.float64) for c in
                            ("bow_velocity", "bow_force", "beta", "finger_ratio")),
-                   rows.loc[rows["pluck"], "time"].to_numpy(np.float64))
+                   rows.loc[rows["pluck"], "time"].to_numpy(np.float64),
+                   rows.loc[rows["pluck"], "bow_force"].to_numpy(np.float64))
 
     def sample(self, column: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Linear interpolation of ``column`` at times ``t`` (held beyond the ends)."""
@@ -66,10 +72,12 @@ class _StringTrack:
         mode = np.where(bowing, MODE_BOW, MODE_LIFTED).astype(np.int8)
         lo = start / inst.sample_rate
         hi = (start + n_out) / inst.sample_rate
-        plucks = self.pluck_times[(self.pluck_times >= lo) & (self.pluck_times < hi)]
-        offsets = tuple(int(round((p - lo) * inst.internal_rate)) for p in plucks)
+        now = (self.pluck_times >= lo) & (self.pluck_times < hi)
+        offsets = tuple(int(round((p - lo) * inst.internal_rate)) for p in self.pluck_times[now])
+        pulls = tuple(PLUCK_DISPLACEMENT * (f / PLUCK_REFERENCE_FORCE if f > 0 else 1.0)
+                      for f in self.pluck_forces[now])
         return StringInput(velocity, force, mode, self.sample(self.beta, t_sub),
-                           self.sample(self.finger_ratio, t_sub), offsets)
+                           self.sample(self.finger_ratio, t_sub), offsets, pulls)
 
 
 def render_actions(

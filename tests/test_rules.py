@@ -8,7 +8,7 @@ import pytest
 from _notation_score import write_score
 
 from data_schemas.actions import validate_actions
-from pipelines.rules import perform_part
+from pipelines.rules import perform_part, string_force_factors
 from pipelines.rules_config import dynamic_table, load_config
 from pipelines.score import read_score
 
@@ -71,15 +71,21 @@ def test_actions_table_is_valid_and_time_ordered(perf):
 def test_dynamics_set_beta_and_velocity(perf):
     mf = bowed(perf, 0.1, 0.9)
     f = bowed(perf, 23.1, 23.9)
-    assert mf["beta"].to_numpy() == pytest.approx(0.10)
-    assert f["beta"].to_numpy() == pytest.approx(0.08)
-    assert mf["bow_velocity"].abs().max() == pytest.approx(0.33, abs=1e-6)
-    assert f["bow_velocity"].abs().max() == pytest.approx(0.40, abs=1e-6)
+    def table(key, level):
+        return float(dynamic_table(CFG, key, [level])[0])
+
+    assert mf["beta"].to_numpy() == pytest.approx(table("beta", 5.0))
+    assert f["beta"].to_numpy() == pytest.approx(table("beta", 6.0))
+    assert table("beta", 6.0) < table("beta", 5.0)
+    assert mf["bow_velocity"].abs().max() == pytest.approx(table("velocity", 5.0), abs=1e-6)
+    assert f["bow_velocity"].abs().max() == pytest.approx(table("velocity", 6.0), abs=1e-6)
 
 
 def test_force_comes_from_the_dynamic_table(perf):
-    mid = bowed(perf, 0.45, 0.55)["bow_force"]
-    assert mid.to_numpy() == pytest.approx(float(dynamic_table(CFG, "force", [5.0])[0]))
+    mid = bowed(perf, 0.45, 0.55)
+    factor = string_force_factors("violin")[mid["string"].to_numpy(int)]
+    assert mid["bow_force"].to_numpy() == pytest.approx(
+        float(dynamic_table(CFG, "force", [5.0])[0]) * factor)
 
 
 def test_detached_notes_stop_and_reverse(perf):
@@ -219,7 +225,7 @@ def test_grace_note_takes_time_from_the_next(perf):
 
 def test_sul_ponticello_moves_towards_the_bridge(perf):
     w = bowed(perf, at(46) + 0.1, at(46) + 0.5)
-    assert w["beta"].to_numpy() == pytest.approx(0.08 * 0.5)
+    assert w["beta"].to_numpy() == pytest.approx(float(dynamic_table(CFG, "beta", [6.0])[0]) * 0.5)
 
 
 def test_max_bow_acceleration_is_respected(perf):
@@ -277,4 +283,10 @@ def test_skill_levels_jitter_reproducibly(notes):
 def test_instrument_override_changes_force(notes, perf):
     viola = perform_part(notes, CFG, instrument="viola")
     ratio = force_at(viola, 0.5) / force_at(perf, 0.5)
-    assert ratio == pytest.approx(CFG["instruments"]["viola"]["force_scale"])
+    string_violin = int(bowed(perf, 0.5, 0.51)["string"].iloc[0])
+    string_viola = int(bowed(viola, 0.5, 0.51)["string"].iloc[0])
+    expected = (CFG["instruments"]["viola"]["force_scale"]
+                * string_force_factors("viola")[string_viola]
+                / string_force_factors("violin")[string_violin])
+    assert ratio == pytest.approx(expected)
+    assert ratio != pytest.approx(1.0)

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 import scipy.signal
 
 from synth import render_actions
@@ -36,3 +37,11 @@ def test_pluck_is_loud_then_silent_before_pull_ends():
     audio = render_actions(pluck_actions(3), body=None, tail=1.0)
     assert np.abs(audio[: int(0.2 * 44100)]).max() > 0.01
     assert np.all(np.isfinite(audio))
+
+
+def test_pluck_strength_follows_the_rows_bow_force():
+    soft = pluck_actions(2).assign(bow_force=[0.3, 0.0])
+    hard = pluck_actions(2).assign(bow_force=[1.5, 0.0])
+    peak_soft = np.abs(render_actions(soft, body=None, tail=0.5)).max()
+    peak_hard = np.abs(render_actions(hard, body=None, tail=0.5)).max()
+    assert peak_hard / peak_soft == pytest.approx(5.0, rel=0.25)
