@@ -346,11 +346,13 @@ def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: np.ndarray,
 
 def _pluck(e: Event, config: dict[str, Any]) -> list[dict[str, np.ndarray]]:
     beta = float(_beta(e, np.array([e.t0]), config)[0])
+    # A pluck row's bow_force is its strength (1 N = the instrument's default pull, at mf).
+    strength = dynamic_table(config, "force", [e.dynamic]) / dynamic_table(config, "force", [5.0])
     out = []
     members = [*e.roll, *zip(e.strings, e.semitones, strict=True)]
     for j, (string, semis) in enumerate(members):
         t = e.t0 + 0.01 * j
-        out.append(_rows(np.array([t]), string, semis, np.zeros(1), np.zeros(1),
+        out.append(_rows(np.array([t]), string, semis, strength, np.zeros(1),
                          np.array([beta]), np.array([0.5]), pluck=True))
         if e.end - _TICK > t + _TICK:
             out.append(_rows(np.array([e.end - _TICK]), string, semis, np.zeros(1), np.zeros(1),

@@ -422,7 +422,9 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
                         "chord notes cannot be bowed at once and are rolled")
     strokes = bowing.plan(events, config, bow_length=inst_cfg["bow_length"], warnings=warnings)
     actions = bowing.frames(events, strokes, config, force_scale=inst_cfg["force_scale"])
-    actions["bow_force"] *= string_force_factors(name)[actions["string"].to_numpy(int)]
+    bowing_rows = ~actions["pluck"].to_numpy(bool)
+    factors = string_force_factors(name)[actions["string"].to_numpy(int)]
+    actions.loc[bowing_rows, "bow_force"] *= factors[bowing_rows]
     table = pd.DataFrame({
         "t0": [e.t0 for e in events], "played_end": [e.played_end for e in events],
         "end": [e.end for e in events], "label": [e.label for e in events],

@@ -60,7 +60,7 @@ def attack_force(perf, t: float) -> float:
 
 def bowed(perf, a: float, b: float) -> pd.DataFrame:
     w = window(perf, a, b)
-    return w[w["bow_force"] > 0]
+    return w[(w["bow_force"] > 0) & ~w["pluck"]]
 
 
 def test_actions_table_is_valid_and_time_ordered(perf):
@@ -155,6 +155,7 @@ def test_pizz_plucks_and_arco_bows_again(perf):
     plucks = plucks[plucks["pluck"]]
     assert plucks["time"].round(3).tolist() == [20.0, 21.0]
     assert set(plucks["string"]) == {1}
+    assert (plucks["bow_force"] > 0).all()  # the pluck's strength (1 N at mf)
     assert bowed(perf, 20.001, 21.99).empty
     assert not bowed(perf, 22.0, 22.9).empty
 
