@@ -1,0 +1,413 @@
+"""Sample search: choose one database note per score note (Maestre et al. 2010, sec. 3.2).
+
+For each target note (:data:`data_schemas.sampling.SAMPLING_TARGETS`) the candidates are the
+database notes of its group; when the group is empty, those of the nearest compatible group
+(a fallback, at a cost; a sample of the other bow direction is mirrored). The target cost of
+candidate q for note m is
+
+    w_b (w_D |log2(D_m / D_q)| + w_le |log2(le_m / le_q)| + w_d min(|d_m - d_q| / span, 1)
+         + w_s |s_m - s_q| / 3) + w_g Mahalanobis(f_pred_m, f_q; Sigma_G) + w_fb dist(G),
+
+computed for all candidates of a group at once; the ``n_best`` cheapest per note go to the
+Viterbi search (:mod:`gesture_db.search_kernel`), which adds ``w_b w_c`` times the
+continuity cost at every junction without a rest (L1 of the jumps in velocity, force and
+beta between the end of one sample and the start of the next, in units of
+``continuity_scale``). Weights live in ``gesture_db/config/search.toml``.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.errors import ArcoError, ParameterError
+from data_schemas.sampling import validate_choices, validate_targets
+from gesture_db.groups import CONTOUR_PARAMS, grammar_for
+from gesture_db.search_kernel import path_cost, viterbi
+
+#: Bounds on the number of Viterbi candidates per note.
+MAX_N_BEST = 1024
+
+
+class EmptyGroupsError(ArcoError):
+    """No compatible database sample exists for some note groups of the score."""
+
+
+# --------------------------------------------------------------------------- configuration
+
+
+@lru_cache(maxsize=1)
+def _default_text() -> str:
+    return resources.files("gesture_db").joinpath("config/search.toml").read_text("utf-8")
+
+
+def load_search_config(path: str | os.PathLike | None = None,
+                       overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The shipped search settings merged with a user TOML file and/or a dict, validated.
+
+    Raises
+    ------
+    ParameterError
+        Missing or unreadable file, unknown key, negative weight (naming file and key).
+    """
+    config = tomllib.loads(_default_text())
+    if path is not None:
+        p = Path(path)
+        if not p.is_file():
+            raise ParameterError(f"search config {p} not found")
+        try:
+            user = tomllib.loads(p.read_text("utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise ParameterError(f"search config {p}: not TOML ({exc})") from None
+        _merge(config, user, str(p), "")
+    if overrides:
+        _merge(config, overrides, "<overrides>", "")
+    _validate(config)
+    return config
+
+
+def _merge(base: dict, over: dict, source: str, prefix: str) -> None:
+    for key, value in over.items():
+        name = f"{prefix}{key}"
+        open_table = prefix == "fallback.technique."
+        if key not in base and not open_table:
+            raise ParameterError(f"search config {source}: unknown key '{name}'")
+        if isinstance(value, dict) and isinstance(base.get(key), dict):
+            _merge(base[key], value, source, f"{name}.")
+        else:
+            base[key] = value
+
+
+def _validate(config: dict) -> None:
+    n = config["n_best"]
+    if not isinstance(n, int) or not 1 <= n <= MAX_N_BEST:
+        raise ParameterError(f"search config: n_best={n!r} must be an integer in 1..{MAX_N_BEST}")
+    for section in ("weights", "continuity_scale"):
+        for key, value in config[section].items():
+            if not isinstance(value, int | float) or value < 0:
+                raise ParameterError(f"search config: {section}.{key}={value!r} must be >= 0")
+    for key, value in config["continuity_scale"].items():
+        if value <= 0:
+            raise ParameterError(f"search config: continuity_scale.{key}={value!r} must be > 0")
+    if config["costs"]["dynamic_span"] <= 0:
+        raise ParameterError("search config: costs.dynamic_span must be > 0")
+
+
+# --------------------------------------------------------------------------- groups
+
+
+def _parts(group: str) -> tuple[str, str, str, str]:
+    t, d, s, r = (group.split("-") + ["", "", "", ""])[:4]
+    return t, d, s, r
+
+
+def group_distance(a: str, b: str, config: dict[str, Any]) -> float:
+    """Distance between two note groups (0 for the same group), see ``[fallback]``."""
+    if a == b:
+        return 0.0
+    fb = config["fallback"]
+    ta, da, sa, ra = _parts(a)
+    tb, db, sb, rb = _parts(b)
+    dist = 0.0
+    if ta != tb:
+        table = fb["technique"]
+        dist += float(table.get(f"{ta}-{tb}", table.get(f"{tb}-{ta}", fb["technique_default"])))
+    dist += fb["direction"] * (da != db) + fb["slur_position"] * (sa != sb)
+    dist += fb["run_position"] * (ra != rb)
+    return dist
+
+
+def resolve_groups(wanted: list[str], available: list[str],
+                   config: dict[str, Any]) -> dict[str, tuple[str, float]]:
+    """Map each wanted group to itself or to its nearest compatible available group.
+
+    Returns
+    -------
+    dict
+        ``wanted -> (group, distance)``; groups without a compatible one are left out.
+    """
+    out = {}
+    limit = config["fallback"]["max_distance"]
+    for g in wanted:
+        if g in available:
+            out[g] = (g, 0.0)
+            continue
+        scored = sorted((group_distance(g, a, config), a) for a in available)
+        if scored and scored[0][0] <= limit:
+            out[g] = (scored[0][1], scored[0][0])
+    return out
+
+
+# --------------------------------------------------------------------------- index
+
+
+@dataclass(frozen=True)
+class GroupIndex:
+    """Arrays of one group's database notes for vectorised target costs.
+
+    Attributes
+    ----------
+    note_id : np.ndarray [shape=(n,)], object
+    duration : np.ndarray [shape=(n,)], s
+    string_length : np.ndarray [shape=(n,)], m
+    string : np.ndarray [shape=(n,)]
+    dynamic : np.ndarray [shape=(n,)]
+    features : np.ndarray [shape=(n, k)]
+        PCA features f.
+    whitened : np.ndarray [shape=(n, k)]
+        ``f L^-T`` with ``Sigma_G = L L^T``, so Mahalanobis distances are Euclidean.
+    whiten : np.ndarray [shape=(k, k)]
+        ``L^-T``.
+    feature_mean : np.ndarray [shape=(k,)]
+    start, end : np.ndarray [shape=(n, 3)]
+        Bezier velocity (m/s), force (N) and beta at the note's start and end.
+    """
+
+    note_id: np.ndarray
+    duration: np.ndarray
+    string_length: np.ndarray
+    string: np.ndarray
+    dynamic: np.ndarray
+    features: np.ndarray
+    whitened: np.ndarray
+    whiten: np.ndarray
+    feature_mean: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.note_id.size)
+
+
+def edge_values(params: np.ndarray, group: str) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end values of velocity, force and beta from contour vectors.
+
+    Parameters
+    ----------
+    params : np.ndarray [shape=(n, d)]
+        Contour vectors p of one group.
+    group : str
+        The group (its grammar gives the layout of p).
+
+    Returns
+    -------
+    start, end : np.ndarray [shape=(n, 3)]
+    """
+    grammar = grammar_for(group)
+    starts, ends = [], []
+    k = 0
+    for param in CONTOUR_PARAMS:
+        S = grammar.n_segments(param)
+        starts.append(params[:, k + S])
+        ends.append(params[:, k + 2 * S])
+        k += 4 * S + 1
+    return np.column_stack(starts), np.column_stack(ends)
+
+
+def build_group_index(notes: pd.DataFrame, group: str, feature_mean: np.ndarray,
+                      feature_cov: np.ndarray) -> GroupIndex:
+    """Index the notes of one group (rows of the database notes table)."""
+    F = np.vstack(notes["features"].to_numpy()).astype(np.float64)
+    P = np.vstack(notes["params"].to_numpy()).astype(np.float64)
+    L = np.linalg.cholesky(feature_cov)
+    W = np.linalg.inv(L).T
+    start, end = edge_values(P, group)
+    return GroupIndex(
+        note_id=notes["note_id"].to_numpy().astype(object),
+        duration=notes["duration"].to_numpy(np.float64),
+        string_length=notes["effective_string_length"].to_numpy(np.float64),
+        string=notes["string"].to_numpy(np.float64),
+        dynamic=notes["dynamic"].to_numpy(np.float64), features=F, whitened=F @ W, whiten=W,
+        feature_mean=np.asarray(feature_mean, np.float64), start=start, end=end)
+
+
+class SearchIndex:
+    """Per-group arrays of a whole database, built once and reused for every search.
+
+    Parameters
+    ----------
+    groups : dict of str to GroupIndex
+    source : str
+        Where the index came from (for messages).
+    """
+
+    def __init__(self, groups: dict[str, GroupIndex], source: str = "<index>") -> None:
+        self.groups = groups
+        self.source = source
+
+    @classmethod
+    def from_db(cls, db) -> SearchIndex:
+        """Index a :class:`gesture_db.store.GestureDB`."""
+        from gesture_db.store import model_from_row
+
+        notes = db.notes()
+        models = db.models().set_index("group")
+        groups = {}
+        for group, rows in notes.groupby("group", sort=True):
+            model = model_from_row(models.loc[group])
+            groups[str(group)] = build_group_index(rows, str(group), model.feature_mean,
+                                                   model.feature_cov)
+        return cls(groups, source=str(db.path))
+
+    @property
+    def n_notes(self) -> int:
+        """Notes in the index."""
+        return sum(len(g) for g in self.groups.values())
+
+
+# --------------------------------------------------------------------------- search
+
+
+@dataclass
+class SearchResult:
+    """The search's output.
+
+    Attributes
+    ----------
+    choices : pandas.DataFrame
+        :data:`data_schemas.sampling.SAMPLE_CHOICES`, one row per target.
+    total_cost : float
+        Cost of the chosen path.
+    fallbacks : dict of str to str
+        Wanted group -> group used, for the groups that fell back.
+    """
+
+    choices: pd.DataFrame
+    total_cost: float
+    fallbacks: dict[str, str]
+
+
+def search(targets: pd.DataFrame, index: SearchIndex, *, predictors=None,
+           config: dict[str, Any] | None = None) -> SearchResult:
+    """Choose a database sample for every target note.
+
+    Parameters
+    ----------
+    targets : pandas.DataFrame
+        :data:`data_schemas.sampling.SAMPLING_TARGETS` rows in playing order.
+    index : SearchIndex
+        The database's per-group arrays.
+    predictors : gesture_db.predict.Predictors, optional
+        Per-group feature regressors; without them (or for a group without one) the
+        predicted features are the group mean.
+    config : dict, optional
+        Search settings (:func:`load_search_config`); default the shipped ones.
+
+    Returns
+    -------
+    SearchResult
+
+    Raises
+    ------
+    EmptyGroupsError
+        Some target groups have no compatible group in the database (names them).
+    """
+    from gesture_db.predict import context_features
+
+    config = config or load_search_config()
+    targets = validate_targets(targets)
+    M = len(targets)
+    if M == 0:
+        raise ParameterError("no target notes to search samples for")
+    wanted = sorted(targets["group"].unique())
+    resolved = resolve_groups(wanted, sorted(index.groups), config)
+    missing = [g for g in wanted if g not in resolved]
+    if missing:
+        have = ", ".join(sorted(index.groups)) or "none"
+        raise EmptyGroupsError(
+            f"{index.source}: no compatible samples for note group(s) {', '.join(missing)} "
+            f"(the database has {have}; raise fallback.max_distance="
+            f"{config['fallback']['max_distance']} or add recordings of these groups)")
+    w = config["weights"]
+    N = int(min(config["n_best"], max(len(index.groups[g]) for g, _ in resolved.values())))
+    target = np.full((M, N), np.inf)
+    cand = np.zeros((M, N), np.int64)
+    n_cand = np.zeros(M, np.int64)
+    start = np.zeros((M, N, 3))
+    end = np.zeros((M, N, 3))
+    gesture = np.zeros((M, N))
+    context = context_features(targets)
+    group_col = targets["group"].to_numpy()
+    used = np.empty(M, object)
+    mirrored = np.zeros(M, bool)
+    for g in wanted:
+        rows = np.flatnonzero(group_col == g)
+        real, dist = resolved[g]
+        gi = index.groups[real]
+        used[rows] = real
+        flip = _parts(g)[1] != _parts(real)[1]
+        mirrored[rows] = flip
+        pred = predictors.predict(real, context[rows]) if predictors is not None else None
+        if pred is None:
+            pred = np.broadcast_to(gi.feature_mean, (rows.size, gi.feature_mean.size))
+        base = w["fallback"] * dist
+        sign = np.array([-1.0, 1.0, 1.0]) if flip else np.ones(3)
+        for chunk in _chunks(rows.size, len(gi)):
+            r = rows[chunk]
+            cost, cg = _target_costs(targets.iloc[r], pred[chunk], gi, config)
+            cost += base
+            k = min(N, len(gi))
+            best = np.argpartition(cost, k - 1, axis=1)[:, :k] if k < len(gi) else \
+                np.broadcast_to(np.arange(k), (r.size, k))
+            order = np.take_along_axis(cost, best, axis=1).argsort(axis=1, kind="stable")
+            best = np.take_along_axis(best, order, axis=1)
+            target[r, :k] = np.take_along_axis(cost, best, axis=1)
+            gesture[r, :k] = np.take_along_axis(cg, best, axis=1)
+            cand[r, :k] = best
+            n_cand[r] = k
+            start[r, :k] = gi.start[best] * sign
+            end[r, :k] = gi.end[best] * sign
+    link = np.r_[False, targets["run_position"].isin(["mid", "end"]).to_numpy()[1:]]
+    scale = np.array([config["continuity_scale"][p] for p in CONTOUR_PARAMS])
+    w_c = w["basic"] * w["continuity"]
+    path, total = viterbi(target, n_cand, start, end, link, scale=scale, w_c=w_c)
+    tc, cc = path_cost(target, start, end, link, path, scale=scale, w_c=w_c)
+    m = np.arange(M)
+    chosen = cand[m, path]
+    choices = pd.DataFrame({
+        "target_index": m.astype(np.int32),
+        "note_id": [index.groups[used[i]].note_id[chosen[i]] for i in m],
+        "group": group_col, "sample_group": used.astype(str), "mirrored": mirrored,
+        "sample_duration": [index.groups[used[i]].duration[chosen[i]] for i in m],
+        "target_cost": tc, "continuity_cost": cc, "gesture_cost": gesture[m, path]})
+    fallbacks = {g: r for g, (r, d) in resolved.items() if r != g}
+    return SearchResult(validate_choices(choices, source="search"), total, fallbacks)
+
+
+def _chunks(n_rows: int, n_cand: int, budget: int = 2_000_000) -> list[slice]:
+    """Row slices so that a chunk's cost matrix holds about ``budget`` entries."""
+    step = max(1, budget // max(n_cand, 1))
+    return [slice(a, min(a + step, n_rows)) for a in range(0, n_rows, step)]
+
+
+def _target_costs(t: pd.DataFrame, pred: np.ndarray, gi: GroupIndex,
+                  config: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted target cost (rows x candidates) and the unweighted gesture cost."""
+    w = config["weights"]
+    D = t["duration"].to_numpy(np.float64)[:, None]
+    le = t["effective_string_length"].to_numpy(np.float64)[:, None]
+    dyn = t["dynamic"].to_numpy(np.float64)[:, None]
+    s = t["string"].to_numpy(np.float64)[:, None]
+    basic = w["duration"] * np.abs(np.log2(D / gi.duration))
+    basic += w["string_length"] * np.abs(np.log2(le / gi.string_length))
+    basic += w["dynamic"] * np.minimum(np.abs(dyn - gi.dynamic)
+                                       / config["costs"]["dynamic_span"], 1.0)
+    basic += w["string"] * np.abs(s - gi.string) / 3.0
+    pw = np.asarray(pred, np.float64) @ gi.whiten
+    d2 = (np.sum(pw**2, axis=1)[:, None] + np.sum(gi.whitened**2, axis=1)[None, :]
+          - 2.0 * pw @ gi.whitened.T)
+    cg = np.sqrt(np.maximum(d2, 0.0))
+    return w["basic"] * basic + w["gesture"] * cg, cg
+
+
+__all__ = ["EmptyGroupsError", "GroupIndex", "SearchIndex", "SearchResult",
+           "build_group_index", "edge_values", "group_distance", "load_search_config",
+           "resolve_groups", "search"]
