@@ -1,0 +1,19 @@
+"""``arco demo`` writes its audio, plots and report."""
+
+import numpy as np
+import soundfile as sf
+
+from pipelines.cli import main
+
+
+def test_demo_writes_audio_plots_and_report(tmp_path):
+    assert main(["demo", "-o", str(tmp_path)]) == 0
+    for name in ("scales.wav", "mozart-k421-rules.wav"):
+        audio, rate = sf.read(tmp_path / name)
+        assert rate == 44100 and np.isfinite(audio).all() and np.abs(audio).max() > 0.01
+    assert (tmp_path / "scales_cello.png").stat().st_size > 10_000
+    assert (tmp_path / "mozart-k421-rules.png").stat().st_size > 10_000
+    report = (tmp_path / "report.md").read_text()
+    cents = [float(line.split("|")[3]) for line in report.splitlines()
+             if line.startswith("| violin |")]
+    assert len(cents) == 20 and max(abs(c) for c in cents) < 25
