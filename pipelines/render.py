@@ -155,7 +155,8 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
         rendered = PartRender(index, str(part["part_name"].iloc[0]), name, perf)
         if synth is not None:
             rendered.audio = np.asarray(
-                synth(perf.actions, instrument=name, sample_rate=sample_rate, seed=seed),
+                synth(perf.actions, instrument=name, sample_rate=sample_rate, seed=seed,
+                      progress=show and len(parts) == 1),
                 dtype=np.float32)
         result.parts.append(rendered)
     if synth is not None:
