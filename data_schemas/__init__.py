@@ -13,6 +13,7 @@ from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
 from data_schemas.errors import ArcoError, ParameterError, SchemaError
 from data_schemas.gesture_db import DB_CONTOURS, DB_GROUP_MODELS, DB_NOTES, GESTURE_DB_VERSION
 from data_schemas.io import atomic_path, read_frame, read_table, write_table
+from data_schemas.labels import LABELS, merge_labels, read_labels, validate_labels, write_labels
 from data_schemas.notes import (
     NOTES,
     NOTES_VERSION,
@@ -35,6 +36,11 @@ __all__ = [
     "read_recording",
     "write_annotation",
     "write_recording",
+    "LABELS",
+    "merge_labels",
+    "read_labels",
+    "validate_labels",
+    "write_labels",
     "ACTIONS",
     "ACTIONS_VERSION",
     "ArcoError",

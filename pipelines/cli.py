@@ -23,6 +23,8 @@ COMMAND_MODULES = (
     "pipelines.commands.simulate_recordings",
     "pipelines.commands.build_db",
     "pipelines.commands.db",
+    "pipelines.commands.train",
+    "pipelines.commands.evaluate",
 )
 
 EXIT_USAGE = 2

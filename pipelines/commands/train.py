@@ -1,0 +1,71 @@
+"""``arco train --instrument violin --teacher auto -o models/``: train the listening loop."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from data_schemas.errors import ParameterError
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``train`` sub-command."""
+    p = subparsers.add_parser(
+        "train", help="train the feedback controller's classifiers, K and initial forces",
+        description="Per string x dynamic: basic training (judged clips), an SVM classifier "
+                    "(10-fold CV accuracy), the force factor K and the initial forces. Pairs "
+                    "run in parallel; a rerun resumes, keeping finished pairs.")
+    p.add_argument("--instrument", default="violin", choices=("violin", "viola", "cello"))
+    p.add_argument("--teacher", default="auto", choices=("auto", "human", "both"),
+                   help="who judges the clips (human labels override automatic ones)")
+    p.add_argument("--labels", metavar="LABELS.parquet", help="human labels (labels table)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="model directory")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="dask.distributed scheduler address (pairs run on its workers)")
+    p.add_argument("--pairs", default=None, metavar="S:DYN,...",
+                   help="only these pairs, e.g. 1:mf,2:mf (default: all)")
+    p.add_argument("--quick", action="store_true",
+                   help="smaller searches (fewer K candidates and repeats; for demos)")
+    p.add_argument("--config", metavar="RULES.toml", help="rules settings (bow lanes)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def _pairs(text: str | None) -> list[tuple[int, str]] | None:
+    if not text:
+        return None
+    out = []
+    for item in text.split(","):
+        s, _, d = item.strip().partition(":")
+        if not s.isdigit() or not d:
+            raise ParameterError(f"--pairs {text!r}: write STRING:DYNAMIC items, e.g. 1:mf")
+        out.append((int(s), d))
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    """Train and print one line per pair."""
+    from pipelines.rules_config import dynamic_table, load_config
+    from pipelines.train import train_instrument
+    from synth.listening.training import QUICK, TrainingSettings
+
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers {args.workers} must be >= 1")
+    config = load_config(args.config)
+    levels = {"p": 3, "mp": 4, "mf": 5, "f": 6}
+    lanes = {d: (float(dynamic_table(config, "velocity", [lv])[0]),
+                 float(dynamic_table(config, "beta", [lv])[0])) for d, lv in levels.items()}
+    results = train_instrument(
+        args.instrument, args.output, teacher=args.teacher, labels_path=args.labels,
+        pairs=_pairs(args.pairs), lanes=lanes,
+        settings=QUICK if args.quick else TrainingSettings(), workers=args.workers,
+        scheduler=args.scheduler, seed=args.seed, progress=not args.quiet)
+    for r in sorted(results, key=lambda r: r["key"]):
+        forces = ", ".join(f"{f:.3g}" for f in r["initial_forces"])
+        print(f"{r['key']}: cv accuracy {100 * r['cv_accuracy']:.1f} %, K {r['K']:.3f}, "
+              f"initial forces [{forces}] N, {r['n_clips']} clips, {r['seconds']:.0f} s")
+    if not results:
+        print(f"{args.output}: every requested pair is already trained", file=sys.stderr)
+    return 0

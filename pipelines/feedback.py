@@ -1,0 +1,269 @@
+"""``--method feedback``: the rules plan the bowing, the listening controller owns the force.
+
+The rules (:func:`pipelines.rules.perform_part`) choose string and finger from the pitch,
+bow velocity and beta from the dynamic (the "bow lanes"), the bow direction and where the bow
+is lifted. :func:`hop_plan` samples that plan once per hop of 256 samples; the feedback loop
+(:func:`synth.listening.perform`) then plays it, choosing the bow force from what it hears
+with the string x dynamic classifiers in ``models_dir``. The returned actions table records
+what the controller actually did (one frame per hop per string).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.actions import validate_actions
+from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
+from data_schemas.errors import ParameterError
+from pipelines.instruments import get_instrument
+from pipelines.rules import Performance, fermata_warp, perform_part
+from pipelines.rules_config import dynamic_table
+from synth.listening.controller import HopPlan, PerformanceLog
+from synth.listening.features import HOP
+
+#: Dynamic level (0..9, p = 3 .. f = 6) of each trained lane.
+LANE_LEVELS = {"p": 3, "mp": 4, "mf": 5, "f": 6}
+TAIL = 1.0  # s of ring-out after the last hop
+
+
+def lane_of(level: np.ndarray) -> np.ndarray:
+    """Nearest trained lane (``p``, ``mp``, ``mf``, ``f``) of dynamic levels (0..9)."""
+    names = np.array(list(LANE_LEVELS))
+    idx = np.clip(np.rint(np.asarray(level, np.float64)) - 3, 0, 3).astype(int)
+    return names[idx]
+
+
+def hop_plan(perf: Performance, config: dict[str, Any], instrument: str, *,
+             sample_rate: int = 44100) -> tuple[HopPlan, np.ndarray]:
+    """Sample the rules' actions once per hop.
+
+    Parameters
+    ----------
+    perf : Performance
+        The rules' output for one part.
+    config : dict
+        Rules configuration (velocity table of the dynamics).
+    instrument : str
+    sample_rate : int, Hz
+
+    Returns
+    -------
+    plan : HopPlan
+    span : np.ndarray [shape=(n, n_strings)], bool
+        Hops inside each string's first..last rules frame (frames are written there).
+    """
+    actions = perf.actions
+    inst = get_instrument(instrument)
+    n_strings = len(inst.open_strings)
+    end = float(actions["time"].max()) if len(actions) else 0.0
+    n = int(np.ceil(end * sample_rate / HOP)) + 1
+    t = (np.arange(n) + 1) * HOP / sample_rate
+    shape = (n, n_strings)
+    plan = HopPlan(np.zeros(shape, bool), np.zeros(shape), np.full(shape, 0.1), np.zeros(shape),
+                   np.ones(shape), np.zeros(shape), np.full(shape, "mf", object),
+                   np.zeros(shape, bool), np.zeros(shape, bool), [[] for _ in range(n)])
+    span = np.zeros(shape, bool)
+    events = perf.events.sort_values("t0", kind="stable")
+    for s, rows in actions.groupby("string", sort=True):
+        s = int(s)
+        bowed_rows = rows[~rows["pluck"]]
+        for p in rows.loc[rows["pluck"], "time"]:
+            plan.plucks[min(int(p * sample_rate // HOP), n - 1)].append(s)
+        if bowed_rows.empty:
+            continue
+        time = bowed_rows["time"].to_numpy(np.float64).copy()
+        for i in np.flatnonzero(np.diff(time) <= 0.0) + 1:
+            time[i] = max(time[i], time[i - 1] + 1e-9)
+
+        def at(column: str, rows: pd.DataFrame = bowed_rows, time: np.ndarray = time):
+            return np.interp(t, time, rows[column].to_numpy(np.float64))
+
+        inside = (t >= time[0]) & (t <= time[-1])
+        span[:, s] = inside
+        force = at("bow_force")
+        velocity = at("bow_velocity")
+        semis = -12.0 * np.log2(1.0 - np.clip(at("finger_ratio"), 0.0, 0.8))
+        semis = np.round(semis, 3)
+        bowed = inside & (force > 0.0)
+        plan.bowed[:, s] = bowed
+        plan.velocity[:, s] = np.where(bowed, velocity, 0.0)
+        plan.beta[:, s] = at("beta")
+        plan.semitones[:, s] = semis
+        open_f0 = 440.0 * 2.0 ** ((inst.open_strings[s] - 69) / 12.0)
+        plan.expected_f0[:, s] = open_f0 * 2.0 ** (semis / 12.0)
+        ev = events[events["string"] == s]
+        if len(ev):
+            which = np.clip(np.searchsorted(ev["t0"].to_numpy(), t, side="right") - 1, 0,
+                            len(ev) - 1)
+            level = ev["dynamic"].to_numpy(np.float64)[which]
+        else:
+            level = np.full(n, 5.0)
+        plan.target_speed[:, s] = dynamic_table(config, "velocity", level)
+        plan.dynamic[:, s] = lane_of(level)
+        sign = np.sign(velocity)
+        prev_bowed = np.concatenate([[False], bowed[:-1]])
+        prev_sign = np.concatenate([[0.0], sign[:-1]])
+        reversal = (sign != 0) & (prev_sign != 0) & (sign != prev_sign)
+        # A reversal through rest: the bow stops (sign 0) then moves the other way.
+        moving = np.flatnonzero(sign != 0)
+        through_rest = np.zeros(n, bool)
+        if moving.size > 1:
+            jumps = moving[1:][(np.diff(moving) > 1) & (sign[moving[1:]] != sign[moving[:-1]])]
+            through_rest[jumps] = True
+        start = bowed & (~prev_bowed | reversal | through_rest)
+        plan.note_start[:, s] = start
+        prev_semis = np.concatenate([[semis[0]], semis[:-1]])
+        plan.finger_change[:, s] = bowed & ~start & (np.abs(semis - prev_semis) > 0.05)
+    return plan, span
+
+
+def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
+                    models_dir: str | os.PathLike, instrument: str | None = None,
+                    skill: int = 3, seed: int = 0, sample_rate: int = 44100,
+                    transpose_octaves: bool = False, warp=None,
+                    rng: np.random.Generator | None = None,
+                    ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame, Performance]:
+    """Play one part with the rules' bowing and the listening controller's force.
+
+    Parameters
+    ----------
+    notes : pandas.DataFrame
+        Notes of one part (notes table).
+    config : dict
+        Rules configuration.
+    models_dir : path-like
+        Directory written by ``arco train`` (pairs of this instrument).
+    instrument : str, optional
+        Default: the part's ``instrument`` column.
+    skill : int
+        Vivi skill level 0..3 (pitch and onset jitter of the rules).
+    seed : int
+        Seed of the rules' jitter (when ``rng`` is not given), the controller's jitter and
+        the synthesizer.
+    sample_rate : int, Hz
+    transpose_octaves : bool
+        Fold out-of-range notes by octaves.
+    warp : callable, optional
+        Shared fermata time map (see :func:`pipelines.rules.fermata_warp`).
+    rng : numpy.random.Generator, optional
+        Source of the rules' skill jitter (as in :func:`pipelines.render.render`).
+
+    Returns
+    -------
+    audio : np.ndarray [shape=(n,)], float32
+    actions : pandas.DataFrame
+        Actions table of what was played (one frame per hop per string in use).
+    diagnostics : pandas.DataFrame
+        Contact diagnostics per hop per string (table ``CONTACT_DIAGNOSTICS``).
+    performance : Performance
+        The rules' plan (events, warnings) the controller followed.
+    """
+    from synth.instrument import Instrument
+    from synth.listening.classifier import load_models
+    from synth.listening.controller import perform
+
+    if sample_rate not in (44100, 48000):
+        raise ParameterError(f"sample_rate={sample_rate}: feedback control needs 44100 or "
+                             "48000 Hz")
+    name = instrument or str(notes["instrument"].iloc[0])
+    rng = rng if rng is not None else np.random.default_rng(seed)
+    if warp is None:
+        warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    perf = perform_part(notes, config, instrument=name, skill=skill, rng=rng, warp=warp,
+                        transpose_octaves=transpose_octaves)
+    plan, span = hop_plan(perf, config, name, sample_rate=sample_rate)
+    models = load_models(models_dir, name)
+    inst = Instrument(name, sample_rate=sample_rate, seed=seed)
+    log = perform(plan, models, inst, rng=np.random.default_rng([seed, 1]),
+                  record_diagnostics=True)
+    tail = inst.process(int(TAIL * sample_rate), {}).audio
+    audio = np.concatenate([log.audio, tail]).astype(np.float32)
+    actions = played_actions(perf, plan, span, log, sample_rate=sample_rate)
+    return audio, actions, diagnostics_table(log, sample_rate), perf
+
+
+def played_actions(perf: Performance, plan: HopPlan, span: np.ndarray, log: PerformanceLog, *,
+                   sample_rate: int) -> pd.DataFrame:
+    """The actions table of what the controller played (plus the rules' plucks)."""
+    n, n_strings = plan.bowed.shape
+    t = (np.arange(n) + 1) * HOP / sample_rate
+    frames = []
+    rules = perf.actions
+    for s in range(n_strings):
+        keep = span[:, s]
+        if not keep.any():
+            continue
+        rows = rules[(rules["string"] == s) & ~rules["pluck"]]
+        pos = np.interp(t[keep], rows["time"].to_numpy(), rows["bow_position"].to_numpy())
+        frames.append(pd.DataFrame({
+            "time": t[keep], "string": s,
+            "finger_ratio": np.minimum(1.0 - 2.0 ** (-plan.semitones[keep, s] / 12.0), 0.8),
+            "bow_force": np.where(plan.bowed[keep, s], log.force[keep, s], 0.0),
+            "bow_velocity": np.where(plan.bowed[keep, s], log.velocity[keep, s], 0.0),
+            "beta": plan.beta[keep, s], "bow_position": pos, "pluck": False}))
+    plucks = rules[rules["pluck"]]
+    if len(plucks):
+        frames.append(plucks)
+    if not frames:
+        return validate_actions(rules.iloc[:0])
+    table = pd.concat(frames, ignore_index=True).sort_values(["time", "string"], kind="stable")
+    return validate_actions(table.reset_index(drop=True), source="feedback render")
+
+
+def diagnostics_table(log: PerformanceLog, sample_rate: int) -> pd.DataFrame:
+    """Per-hop contact diagnostics recorded during the feedback render."""
+    rows = []
+    for s, hops in log.diagnostics.items():
+        for k, d in hops:
+            period = d.sounding_period if np.isfinite(d.sounding_period) else None
+            rows.append((k * HOP / sample_rate, s, d.slip_onsets, d.slipping_share,
+                         d.contact_share, d.mean_slip_speed, period))
+    rows.sort(key=lambda r: (r[0], r[1]))
+    return pd.DataFrame(rows, columns=CONTACT_DIAGNOSTICS.column_names)
+
+
+def scale_notes(*, tonic: int = 55, octaves: int = 2, tempo: float = 60.0,
+                dynamic: str = "mf", instrument: str = "violin",
+                repeats: int = 1) -> pd.DataFrame:
+    """A major scale up (and down for ``repeats`` > 1) as a notes table, detached quarters.
+
+    Parameters
+    ----------
+    tonic : int
+        MIDI pitch of the lowest note (55 = G3).
+    octaves : int
+    tempo : float, quarter notes per minute
+    dynamic : str
+        A music21 dynamic mark (``p``, ``mp``, ``mf``, ``f``).
+    instrument : str
+    repeats : int
+        Times the scale is played, alternately up and down.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Notes table.
+    """
+    import music21 as m21
+
+    from pipelines.score.musicxml import notes_from_music21
+
+    steps = [0, 2, 4, 5, 7, 9, 11]
+    up = [tonic + 12 * o + s for o in range(octaves) for s in steps] + [tonic + 12 * octaves]
+    pitches: list[int] = []
+    for r in range(repeats):
+        seq = up if r % 2 == 0 else up[::-1]
+        pitches.extend(seq if r == 0 else seq[1:])
+    part = m21.stream.Part()
+    part.insert(0, {"violin": m21.instrument.Violin, "viola": m21.instrument.Viola,
+                    "cello": m21.instrument.Violoncello}[instrument]())
+    part.append(m21.tempo.MetronomeMark(number=tempo))
+    part.append(m21.dynamics.Dynamic(dynamic))
+    for p in pitches:
+        part.append(m21.note.Note(p, quarterLength=1.0))
+    score = m21.stream.Score([part])
+    return notes_from_music21(score, source=f"<{octaves}-octave scale>")

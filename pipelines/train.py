@@ -1,0 +1,285 @@
+"""The training job: every string x dynamic pair of an instrument, in parallel, resumable.
+
+Each pair (:func:`train_one`) runs basic training with the chosen teacher, fits its
+classifier, searches K and the initial forces, and writes ``<instrument>-<s>-<dyn>.joblib``,
+its JSON metadata (``"complete": true`` last) and the pair's judged clips as a labels table
+``labels/<key>.parquet``. A rerun skips complete pairs, so an interrupted run resumes.
+Pairs run on local worker processes, or on a dask.distributed cluster given its address.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.errors import ParameterError
+from data_schemas.labels import AUTO_LABELLER, merge_labels, read_labels, write_labels
+from synth.listening.classifier import DYNAMICS, pair_key, save_pair
+from synth.listening.training import DEFAULT_LANES, JudgedClip, TrainingSettings
+
+TEACHERS = ("auto", "human", "both")
+
+
+def clip_id(key: str, semitones: float, force: float) -> str:
+    """Stable id of an automatic training clip."""
+    return f"{key}-s{semitones:g}-F{force:.5g}"
+
+
+def is_complete(out_dir: str | os.PathLike, key: str) -> bool:
+    """Whether a pair finished training (its JSON says ``complete``)."""
+    import json
+
+    path = Path(out_dir) / f"{key}.json"
+    try:
+        return bool(json.loads(path.read_text("utf-8")).get("complete"))
+    except (OSError, ValueError):
+        return False
+
+
+def _labels_frame(clips: list[JudgedClip], key: str, dynamic: str) -> pd.DataFrame:
+    now = pd.Timestamp.now(tz="UTC").floor("s")
+    return pd.DataFrame({
+        "clip_id": [clip_id(key, j.clip.spec.semitones, j.force) for j in clips],
+        "audio_path": [None] * len(clips),
+        "instrument": [j.clip.spec.instrument for j in clips],
+        "string": [j.clip.spec.string for j in clips],
+        "dynamic": dynamic,
+        "finger": [j.clip.spec.semitones for j in clips],
+        "force": [j.force for j in clips],
+        "velocity": [j.clip.spec.bow_velocity for j in clips],
+        "beta": [j.clip.spec.beta for j in clips],
+        "label": [j.label for j in clips],
+        "labeller": AUTO_LABELLER,
+        "time": now,
+    })
+
+
+def _human_clips(human: pd.DataFrame, base: Path) -> list[JudgedClip]:
+    """Clips of human labels: the labelled audio, or re-rendered from the settings."""
+    import soundfile
+
+    from synth.listening.clips import Clip, ClipSpec, render_clip
+
+    out = []
+    for row in human.itertuples(index=False):
+        spec = ClipSpec(row.instrument, int(row.string), float(row.finger), float(row.force),
+                        float(row.velocity), float(row.beta))
+        if isinstance(row.audio_path, str) and row.audio_path:
+            path = Path(row.audio_path)
+            path = path if path.is_absolute() else base / path
+            try:
+                audio, sr = soundfile.read(str(path), dtype="float32")
+            except (OSError, RuntimeError) as exc:
+                raise ParameterError(f"labels: clip {row.clip_id}: cannot read audio "
+                                     f"{path} ({str(exc).splitlines()[0]})") from None
+            audio = audio if audio.ndim == 1 else audio.mean(axis=1)
+            n = min(audio.size, int(0.3 * sr))
+            clip = Clip(spec, audio, np.zeros(n), np.zeros(0), int(sr))
+        else:
+            clip = render_clip(spec, context=0.1)
+        out.append(JudgedClip(clip, int(row.label)))
+    return out
+
+
+def train_one(instrument: str, string: int, dynamic: str, out_dir: str, *,
+              teacher: str = "auto", labels: pd.DataFrame | None = None,
+              labels_base: str = ".", lane: tuple[float, float] | None = None,
+              settings: TrainingSettings | None = None, seed: int = 0) -> dict[str, Any]:
+    """Train one pair and write its files; return a summary (key, accuracy, K, forces, s).
+
+    Parameters
+    ----------
+    instrument, string, dynamic
+        The pair.
+    out_dir : str
+        Model directory.
+    teacher : {"auto", "human", "both"}
+    labels : pandas.DataFrame, optional
+        Human labels (labels table) for ``human`` / ``both``.
+    labels_base : str
+        Directory that relative ``audio_path`` values are relative to.
+    lane : (float, float), optional
+        Bow velocity (m/s) and beta of the dynamic.
+    settings : TrainingSettings, optional
+    seed : int
+    """
+    from synth.listening.training import basic_training, train_pair
+
+    start = time.perf_counter()
+    key = pair_key(instrument, string, dynamic)
+    settings = settings or TrainingSettings()
+    seed = seed * 1009 + string * 17 + DYNAMICS.index(dynamic)
+    human = None
+    if labels is not None and teacher != "auto":
+        human = labels[(labels["instrument"] == instrument) & (labels["string"] == string)
+                       & (labels["dynamic"] == dynamic) & (labels["labeller"] != AUTO_LABELLER)]
+    clips: list[JudgedClip] = []
+    frame = None
+    if teacher in ("auto", "both"):
+        clips = basic_training(instrument, string, dynamic, lane=lane, settings=settings,
+                               seed=seed)
+        frame = _labels_frame(clips, key, dynamic)
+    if human is not None and len(human):
+        merged = merge_labels(frame, human)
+        by_id = dict(zip(merged["clip_id"], merged["label"], strict=True))
+        if frame is not None:
+            for j, cid in zip(clips, frame["clip_id"], strict=True):
+                j.label = int(by_id.get(cid, j.label))
+        known = set(frame["clip_id"]) if frame is not None else set()
+        extra = human[~human["clip_id"].isin(known)]
+        clips = clips + _human_clips(extra, Path(labels_base))
+        frame = merged
+    if not clips:
+        raise ParameterError(f"{key}: no labelled clips (teacher={teacher!r}; give --labels "
+                             "with human labels of this pair or use --teacher auto)")
+    model, clips = train_pair(instrument, string, dynamic, lane=lane, settings=settings,
+                              clips=clips, seed=seed)
+    out = Path(out_dir)
+    write_labels(frame, out / "labels" / f"{key}.parquet")
+    seconds = time.perf_counter() - start
+    model.metadata.update(teacher=teacher, train_seconds=seconds,
+                          settings={k: v for k, v in asdict(settings).items()
+                                    if k != "controller"})
+    save_pair(model, out)
+    from synth.listening.classifier import update_metadata
+
+    update_metadata(out, key, complete=True)
+    return {"key": key, "cv_accuracy": model.metadata["cv_accuracy"], "K": model.K,
+            "initial_forces": model.metadata["initial_forces"],
+            "n_clips": model.metadata["n_clips"], "seconds": seconds}
+
+
+def _job(args: tuple) -> dict[str, Any]:
+    instrument, string, dynamic, out_dir, kwargs = args
+    return train_one(instrument, string, dynamic, out_dir, **kwargs)
+
+
+def train_instrument(instrument: str, out_dir: str | os.PathLike, *, teacher: str = "auto",
+                     labels_path: str | os.PathLike | None = None,
+                     pairs: Sequence[tuple[int, str]] | None = None,
+                     lanes: dict[str, tuple[float, float]] | None = None,
+                     settings: TrainingSettings | None = None, workers: int | None = None,
+                     scheduler: str | None = None, seed: int = 0, progress: bool = True,
+                     on_result: Callable[[dict], None] | None = None) -> list[dict[str, Any]]:
+    """Train every (or the given) string x dynamic pair of an instrument.
+
+    Parameters
+    ----------
+    instrument : str
+    out_dir : path-like
+        Model directory (created); complete pairs already there are skipped.
+    teacher : {"auto", "human", "both"}
+    labels_path : path-like, optional
+        Human labels (Parquet/CSV labels table); required for ``human``.
+    pairs : sequence of (int, str), optional
+        Subset of (string, dynamic) pairs.
+    lanes : dict, optional
+        Dynamic -> (velocity m/s, beta); default :data:`DEFAULT_LANES`.
+    settings : TrainingSettings, optional
+    workers : int, optional
+        Local worker processes (default: CPU count; 1 runs in this process).
+    scheduler : str, optional
+        Address of a dask.distributed scheduler; pairs then run on its workers.
+    seed : int
+    progress : bool
+        Show a progress bar.
+    on_result : callable, optional
+        Called with each finished pair's summary.
+
+    Returns
+    -------
+    list of dict
+        Summaries of the pairs trained in this run (skipped pairs are not listed).
+    """
+    from tqdm import tqdm
+
+    from synth.strings import load_instrument
+
+    if teacher not in TEACHERS:
+        raise ParameterError(f"--teacher {teacher!r} must be one of {TEACHERS}")
+    n_strings = len(load_instrument(instrument).strings)
+    labels = None
+    if labels_path is not None:
+        labels = read_labels(labels_path)
+    elif teacher != "auto":
+        raise ParameterError(f"--teacher {teacher} needs --labels LABELS.parquet")
+    lanes = lanes or DEFAULT_LANES
+    pairs = list(pairs) if pairs is not None else [(s, d) for s in range(n_strings)
+                                                   for d in DYNAMICS]
+    for s, d in pairs:
+        if not 0 <= s < n_strings or d not in DYNAMICS:
+            raise ParameterError(f"pair ({s}, {d!r}) is not a string x dynamic of the "
+                                 f"{instrument} (strings 0..{n_strings - 1}, {DYNAMICS})")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    todo = [(s, d) for s, d in pairs if not is_complete(out, pair_key(instrument, s, d))]
+    kwargs = {"teacher": teacher, "labels": labels,
+              "labels_base": str(Path(labels_path).parent) if labels_path else ".",
+              "settings": settings, "seed": seed}
+    jobs = [(instrument, s, d, str(out), {**kwargs, "lane": tuple(lanes[d])}) for s, d in todo]
+    results: list[dict[str, Any]] = []
+    bar = tqdm(total=len(jobs), desc=f"train {instrument}", unit="pair", disable=not progress)
+
+    def done(result: dict[str, Any]) -> None:
+        results.append(result)
+        bar.set_postfix_str(f"{result['key']} cv {100 * result['cv_accuracy']:.1f} %")
+        bar.update(1)
+        if on_result is not None:
+            on_result(result)
+
+    try:
+        if scheduler:
+            _run_dask(jobs, scheduler, done)
+        elif (workers or os.cpu_count() or 1) <= 1 or len(jobs) <= 1:
+            for job in jobs:
+                done(_job(job))
+        else:
+            _run_pool(jobs, int(workers or os.cpu_count() or 1), done)
+    finally:
+        bar.close()
+    collect_labels(out)
+    return results
+
+
+def _run_pool(jobs: list[tuple], workers: int, done: Callable[[dict], None]) -> None:
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
+                             mp_context=mp.get_context("spawn")) as pool:
+        futures = [pool.submit(_job, job) for job in jobs]
+        for future in as_completed(futures):
+            done(future.result())
+
+
+def _run_dask(jobs: list[tuple], scheduler: str, done: Callable[[dict], None]) -> None:
+    from distributed import Client, as_completed
+
+    try:
+        client = Client(scheduler, timeout="10s")
+    except OSError as exc:
+        raise ParameterError(f"--scheduler {scheduler}: cannot connect "
+                             f"({str(exc).splitlines()[0]})") from None
+    try:
+        futures = client.map(_job, jobs, pure=False)
+        for future in as_completed(futures):
+            done(future.result())
+    finally:
+        client.close()
+
+
+def collect_labels(out_dir: str | os.PathLike) -> Path | None:
+    """Concatenate every pair's ``labels/<key>.parquet`` into ``labels.parquet``."""
+    out = Path(out_dir)
+    files = sorted((out / "labels").glob("*.parquet"))
+    if not files:
+        return None
+    frame = pd.concat([read_labels(f) for f in files], ignore_index=True)
+    return write_labels(frame, out / "labels.parquet")

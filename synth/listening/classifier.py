@@ -1,0 +1,289 @@
+"""Per string x dynamic classifiers: scaler + SVC on hop features, persisted with metadata.
+
+Each pair's model is a joblib file ``<instrument>-<string>-<dynamic>.joblib`` with a JSON
+file beside it (same stem) holding the feature names, the scikit-learn version, a hash of the
+training data, the 10-fold cross-validated accuracy and the trained control parameters (K
+and the initial forces at fingers 0, 4 and 7 semitones). Loading checks the JSON first, so a
+model saved by an incompatible scikit-learn or a damaged file gives a one-line
+:class:`ModelError`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from data_schemas.errors import ArcoError
+from data_schemas.io import atomic_path
+from synth.listening.features import FEATURE_NAMES
+
+MODEL_FORMAT = 1
+#: The four dynamic lanes a pair can be trained for.
+DYNAMICS = ("p", "mp", "mf", "f")
+#: Finger positions (semitones above the open string) of the initial forces.
+FINGERS = (0.0, 4.0, 7.0)
+
+
+class ModelError(ArcoError):
+    """A trained model is missing, damaged or was saved by an incompatible version."""
+
+
+@dataclass
+class PairModel:
+    """The classifier and control parameters of one string x dynamic.
+
+    Attributes
+    ----------
+    instrument : str
+    string : int
+    dynamic : str
+    pipeline : sklearn.pipeline.Pipeline
+        StandardScaler + SVC over :data:`FEATURE_NAMES`.
+    metadata : dict
+        ``feature_names``, ``sklearn_version``, ``data_hash``, ``cv_accuracy``, ``n_clips``,
+        ``n_hops``, ``class_counts``, ``force_range`` (N), ``K``, ``initial_forces`` (N at
+        :data:`FINGERS`), ``velocity`` (m/s), ``beta``.
+    """
+
+    instrument: str
+    string: int
+    dynamic: str
+    pipeline: Any
+    metadata: dict = field(default_factory=dict)
+
+    @property
+    def key(self) -> str:
+        """File stem: ``violin-1-mf``."""
+        return pair_key(self.instrument, self.string, self.dynamic)
+
+    @property
+    def K(self) -> float:  # noqa: N802 -- the paper's name
+        """Force factor of the control law (1.0 until trained)."""
+        return float(self.metadata.get("K", 1.05))
+
+    def initial_force(self, semitones: float) -> float:
+        """Initial bow force (N) at a finger position, interpolated linearly in semitones."""
+        forces = self.metadata.get("initial_forces")
+        if not forces:
+            lo, hi = self.metadata.get("force_range", (0.1, 1.0))
+            return float(np.sqrt(lo * hi))
+        return float(np.interp(semitones, FINGERS, forces))
+
+    def predict(self, features: np.ndarray) -> np.ndarray:
+        """Classes 1..5 of feature rows [shape=(n, n_features)] -> [shape=(n,)]."""
+        return self.pipeline.predict(np.atleast_2d(features)).astype(np.int64)
+
+    def fast(self) -> FastPredictor:
+        """A single-row predictor equivalent to :meth:`predict` (for the control loop)."""
+        return FastPredictor(self.pipeline)
+
+
+class FastPredictor:
+    """RBF one-vs-one SVC prediction for one row without scikit-learn's per-call overhead.
+
+    Reproduces ``Pipeline(StandardScaler, SVC(kernel='rbf'))`` decisions (ties broken like
+    libsvm: the lowest class wins).
+    """
+
+    def __init__(self, pipeline: Any) -> None:
+        scaler, svc = pipeline[0], pipeline[-1]
+        self.mean = np.asarray(scaler.mean_, np.float64)
+        self.scale = np.asarray(scaler.scale_, np.float64)
+        self.sv = np.asarray(svc.support_vectors_, np.float64)
+        self.sv_norm = np.sum(self.sv**2, axis=1)
+        self.gamma = float(svc._gamma)
+        self.dual = np.asarray(svc.dual_coef_, np.float64)
+        self.intercept = np.asarray(svc.intercept_, np.float64)
+        self.classes = np.asarray(svc.classes_)
+        counts = np.asarray(svc.n_support_)
+        self.starts = np.concatenate([[0], np.cumsum(counts)])
+        n = self.classes.size
+        self.pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
+
+    def __call__(self, x: np.ndarray) -> int:
+        """Class of one feature row [shape=(n_features,)]."""
+        z = (np.asarray(x, np.float64) - self.mean) / self.scale
+        k = np.exp(-self.gamma * (self.sv_norm - 2.0 * self.sv @ z + z @ z))
+        votes = np.zeros(self.classes.size, np.int64)
+        st = self.starts
+        for p, (i, j) in enumerate(self.pairs):
+            s = (self.dual[j - 1, st[i]:st[i + 1]] @ k[st[i]:st[i + 1]]
+                 + self.dual[i, st[j]:st[j + 1]] @ k[st[j]:st[j + 1]] + self.intercept[p])
+            votes[i if s > 0 else j] += 1
+        return int(self.classes[int(np.argmax(votes))])
+
+
+def pair_key(instrument: str, string: int, dynamic: str) -> str:
+    """File stem of a pair's model."""
+    return f"{instrument}-{int(string)}-{dynamic}"
+
+
+def data_hash(features: np.ndarray, labels: np.ndarray) -> str:
+    """SHA-256 (first 16 hex digits) of the training features and labels."""
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(features, np.float64).tobytes())
+    h.update(np.ascontiguousarray(labels, np.int64).tobytes())
+    return h.hexdigest()[:16]
+
+
+def fit_pair(features: np.ndarray, labels: np.ndarray, *, instrument: str, string: int,
+             dynamic: str, folds: int = 10, seed: int = 0, C: float = 10.0) -> PairModel:
+    """Train a pair's classifier and measure its cross-validated accuracy.
+
+    Parameters
+    ----------
+    features : np.ndarray [shape=(n_hops, len(FEATURE_NAMES))]
+    labels : np.ndarray [shape=(n_hops,)]
+        Class 1..5 of each hop (its clip's label).
+    instrument, string, dynamic
+        The pair.
+    folds : int
+        Stratified folds (reduced to the smallest class size if needed, at least 2).
+    seed : int
+        Shuffling seed of the folds.
+    C : float
+        SVC regularisation.
+
+    Returns
+    -------
+    PairModel
+    """
+    import sklearn
+    from sklearn.model_selection import StratifiedKFold, cross_val_score
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+    from sklearn.svm import SVC
+
+    X = np.asarray(features, np.float64)
+    y = np.asarray(labels, np.int64)
+    classes, counts = np.unique(y, return_counts=True)
+    pipeline = make_pipeline(StandardScaler(), SVC(C=C, gamma="scale", kernel="rbf"))
+    k = int(min(folds, counts.min())) if classes.size > 1 else 0
+    if k >= 2:
+        cv = StratifiedKFold(n_splits=k, shuffle=True, random_state=seed)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            accuracy = float(np.mean(cross_val_score(pipeline, X, y, cv=cv)))
+    else:
+        accuracy = float("nan")
+    if classes.size > 1:
+        pipeline.fit(X, y)
+    else:
+        raise ModelError(f"{pair_key(instrument, string, dynamic)}: training data hold only "
+                         f"class {classes.tolist()}; a classifier needs at least two classes")
+    meta = {
+        "format": MODEL_FORMAT,
+        "feature_names": list(FEATURE_NAMES),
+        "sklearn_version": sklearn.__version__,
+        "data_hash": data_hash(X, y),
+        "cv_accuracy": accuracy,
+        "cv_folds": k,
+        "n_hops": int(y.size),
+        "class_counts": {int(c): int(n) for c, n in zip(classes, counts, strict=True)},
+    }
+    return PairModel(instrument, int(string), dynamic, pipeline, meta)
+
+
+def save_pair(model: PairModel, directory: str | os.PathLike) -> Path:
+    """Write ``<key>.joblib`` and ``<key>.json`` atomically; return the JSON path."""
+    import joblib
+
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    with atomic_path(directory / f"{model.key}.joblib") as tmp:
+        joblib.dump(model.pipeline, tmp)
+    meta = {**model.metadata, "instrument": model.instrument, "string": model.string,
+            "dynamic": model.dynamic}
+    path = directory / f"{model.key}.json"
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(json.dumps(meta, indent=2, default=float), "utf-8")
+    return path
+
+
+def update_metadata(directory: str | os.PathLike, key: str, **values: Any) -> None:
+    """Merge ``values`` into a saved pair's JSON metadata (atomically)."""
+    path = Path(directory) / f"{key}.json"
+    meta = _read_json(path)
+    meta.update(values)
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(json.dumps(meta, indent=2, default=float), "utf-8")
+
+
+def _read_json(path: Path) -> dict:
+    if not path.exists():
+        raise ModelError(f"{path}: model metadata not found (train with `arco train`)")
+    try:
+        meta = json.loads(path.read_text("utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ModelError(f"{path}: damaged model metadata ({str(exc).splitlines()[0]})") from None
+    if not isinstance(meta, dict):
+        raise ModelError(f"{path}: damaged model metadata (not a JSON object)")
+    return meta
+
+
+def load_pair(directory: str | os.PathLike, instrument: str, string: int,
+              dynamic: str) -> PairModel:
+    """Load one pair's model, checking format, scikit-learn version and features.
+
+    Raises
+    ------
+    ModelError
+        Missing or damaged files, another format, an incompatible scikit-learn version, or
+        features this Arco does not compute.
+    """
+    import joblib
+    import sklearn
+
+    key = pair_key(instrument, string, dynamic)
+    directory = Path(directory)
+    meta = _read_json(directory / f"{key}.json")
+    if meta.get("format") != MODEL_FORMAT:
+        raise ModelError(f"{directory / key}.json: model format {meta.get('format')!r} is not "
+                         f"{MODEL_FORMAT}; retrain with `arco train`")
+    saved = str(meta.get("sklearn_version", "?"))
+    if saved.split(".")[:2] != sklearn.__version__.split(".")[:2]:
+        raise ModelError(f"{directory / key}.joblib was saved by scikit-learn {saved}, this is "
+                         f"{sklearn.__version__}; retrain with `arco train`")
+    if meta.get("feature_names") != list(FEATURE_NAMES):
+        raise ModelError(f"{directory / key}.json: features {meta.get('feature_names')} differ "
+                         f"from this Arco's {list(FEATURE_NAMES)}; retrain with `arco train`")
+    path = directory / f"{key}.joblib"
+    if not path.exists():
+        raise ModelError(f"{path}: model file not found (train with `arco train`)")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            pipeline = joblib.load(path)
+        pipeline[-1].support_vectors_  # noqa: B018 -- a fitted SVC at the end
+    except Exception as exc:  # noqa: BLE001 -- any unpickling failure means a damaged file
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ModelError(f"{path}: damaged model file ({first})") from None
+    return PairModel(instrument, int(string), dynamic, pipeline, meta)
+
+
+def load_models(directory: str | os.PathLike, instrument: str,
+                n_strings: int = 4) -> dict[tuple[int, str], PairModel]:
+    """Load every trained pair of ``instrument`` found in ``directory``.
+
+    Raises
+    ------
+    ModelError
+        No pair of the instrument is there, or one is damaged or incompatible.
+    """
+    directory = Path(directory)
+    out = {}
+    for s in range(n_strings):
+        for d in DYNAMICS:
+            if (directory / f"{pair_key(instrument, s, d)}.json").exists():
+                out[(s, d)] = load_pair(directory, instrument, s, d)
+    if not out:
+        raise ModelError(f"{directory}: no trained {instrument} models "
+                         f"(run `arco train --instrument {instrument} -o {directory}`)")
+    return out

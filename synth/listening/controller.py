@@ -1,0 +1,291 @@
+"""The black-box feedback controller and the hop-by-hop performance loop.
+
+The controller hears only the audio (features of the last window) and knows only its own
+actions: it never reads the instrument's diagnostics or string constants. Per hop of 256
+samples (~172 Hz) it classifies the sound with the string x dynamic's classifier and scales
+the bow force, ``F <- F * K**(3 - c_avg)``, where ``c_avg`` is the mean class of the last
+``average`` hops; the law applies only while the bow moves faster than half the target
+velocity and does not decelerate. Force and velocity get 1 % Gaussian jitter each hop
+(a seeded generator); ``F >= 0``. A note starts at the initial force of its pair,
+interpolated by finger position.
+
+:func:`perform` plays a :class:`HopPlan` (per-hop controls planned by the rules: string,
+finger, velocity, beta, pair, note starts) with the controller owning the force.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synth.instrument import BowControl, Instrument
+from synth.listening.classifier import PairModel
+from synth.listening.features import HOP, StreamingFeatures, yin_window_for
+
+MAX_FORCE = 50.0  # N, the actions table's limit
+
+
+@dataclass(frozen=True)
+class ControllerSettings:
+    """Tuning of the control law.
+
+    Attributes
+    ----------
+    average : int
+        Hops of classes averaged (Vivi's later code: 4).
+    min_speed_share : float
+        The law applies only while |v| > this x target velocity.
+    jitter : float
+        Relative sigma of the Gaussian jitter on force and velocity per hop.
+    range_margin : float
+        The force stays within the forces judged acceptable in training (the controller's
+        own experience) widened by this factor each way; 0 = only ``0 <= F <= 50 N``.
+    """
+
+    average: int = 4
+    min_speed_share: float = 0.5
+    jitter: float = 0.01
+    range_margin: float = 2.0
+
+
+class ForceController:
+    """Force of one string under feedback.
+
+    Parameters
+    ----------
+    model : PairModel
+        Classifier and K of the string x dynamic being played.
+    rng : numpy.random.Generator
+        Source of the jitter.
+    settings : ControllerSettings, optional
+    K : float, optional
+        Override the model's K (training searches).
+    """
+
+    def __init__(self, model: PairModel, rng: np.random.Generator,
+                 settings: ControllerSettings | None = None, *, K: float | None = None) -> None:
+        self.settings = settings or ControllerSettings()
+        self.rng = rng
+        self.force = 0.0
+        self._recent: deque[int] = deque(maxlen=self.settings.average)
+        self._last_speed = 0.0
+        self.set_model(model, K=K)
+
+    def set_model(self, model: PairModel, *, K: float | None = None) -> None:
+        """Switch classifier (a dynamic change); keep the force."""
+        self.model = model
+        self.K = float(model.K if K is None else K)
+        self.predict = model.fast()
+        good = model.metadata.get("good_range")
+        margin = self.settings.range_margin
+        self.bounds = ((good[0] / margin, min(good[1] * margin, MAX_FORCE)) if good and margin
+                       else (0.0, MAX_FORCE))
+
+    def start_note(self, semitones: float, force: float | None = None) -> None:
+        """Begin a note: initial force of the pair at this finger (or ``force``), N."""
+        self.force = float(self.model.initial_force(semitones) if force is None else force)
+        self._recent.clear()
+
+    def rescale(self, factor: float) -> None:
+        """Scale the force (a finger change inside a slur)."""
+        self.force = float(np.clip(self.force * factor, 0.0, MAX_FORCE))
+
+    def step(self, features: np.ndarray | None, speed: float, target_speed: float) -> int:
+        """Classify the last window and update the force.
+
+        Parameters
+        ----------
+        features : np.ndarray [shape=(n_features,)] or None
+            Features of the window ending now (None: nothing heard yet).
+        speed : float, m/s
+            Bow speed just played (unsigned).
+        target_speed : float, m/s
+            Planned speed of the note.
+
+        Returns
+        -------
+        int
+            Class 1..5 heard (0 when not classified).
+        """
+        s = self.settings
+        c = 0
+        if features is not None:
+            c = self.predict(features)
+            self._recent.append(c)
+        decelerating = speed < self._last_speed - 1e-9
+        self._last_speed = speed
+        if c and speed > s.min_speed_share * target_speed and not decelerating:
+            c_avg = float(np.mean(self._recent))
+            self.force *= self.K ** (3.0 - c_avg)
+        if s.jitter:
+            self.force *= 1.0 + s.jitter * float(self.rng.standard_normal())
+        self.force = float(np.clip(self.force, *self.bounds))
+        return c
+
+
+@dataclass
+class HopPlan:
+    """Per-hop controls planned for one performance (n hops x n_strings).
+
+    Attributes
+    ----------
+    bowed : np.ndarray [shape=(n, s)], bool
+        The bow is on the string at the hop's end.
+    velocity : np.ndarray [shape=(n, s)], m/s (signed)
+    beta : np.ndarray [shape=(n, s)]
+    semitones : np.ndarray [shape=(n, s)]
+        Finger position above the open string.
+    expected_f0 : np.ndarray [shape=(n, s)], Hz
+        Pitch the string is meant to sound (known from the score).
+    target_speed : np.ndarray [shape=(n, s)], m/s
+        Planned sustained speed of the note being played.
+    dynamic : np.ndarray [shape=(n, s)], object
+        Dynamic lane (``p``, ``mp``, ``mf``, ``f``) of the pair to use.
+    note_start : np.ndarray [shape=(n, s)], bool
+        A new bow stroke starts on the string at this hop (reset to the initial force).
+    finger_change : np.ndarray [shape=(n, s)], bool
+        The finger changes inside a stroke (slur): the force is rescaled.
+    plucks : list of list of int
+        Strings plucked at the start of each hop.
+    """
+
+    bowed: np.ndarray
+    velocity: np.ndarray
+    beta: np.ndarray
+    semitones: np.ndarray
+    expected_f0: np.ndarray
+    target_speed: np.ndarray
+    dynamic: np.ndarray
+    note_start: np.ndarray
+    finger_change: np.ndarray
+    plucks: list = field(default_factory=list)
+
+    @property
+    def n_hops(self) -> int:
+        """Number of hops."""
+        return int(self.bowed.shape[0])
+
+
+@dataclass
+class PerformanceLog:
+    """What :func:`perform` played and heard.
+
+    Attributes
+    ----------
+    audio : np.ndarray [shape=(n * HOP,)], float32
+    force, velocity : np.ndarray [shape=(n, s)], N and m/s
+        Controls actually given at each hop's end (0 where lifted).
+    classes : np.ndarray [shape=(n, s)], int
+        Class heard by each string's controller (0 = not classified).
+    diagnostics : dict of int to list
+        Per string, per hop ContactDiagnostics (only with ``record_diagnostics``).
+    """
+
+    audio: np.ndarray
+    force: np.ndarray
+    velocity: np.ndarray
+    classes: np.ndarray
+    diagnostics: dict = field(default_factory=dict)
+
+
+def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument: Instrument, *,
+            rng: np.random.Generator, settings: ControllerSettings | None = None,
+            K: float | None = None, initial_force: float | None = None,
+            record_diagnostics: bool = False) -> PerformanceLog:
+    """Play a hop plan with feedback control of the bow force.
+
+    Parameters
+    ----------
+    plan : HopPlan
+    models : dict of (string, dynamic) to PairModel
+        Trained pairs; a missing pair falls back to the nearest dynamic of the same string.
+    instrument : Instrument
+        A fresh instrument (its block API is driven hop by hop).
+    rng : numpy.random.Generator
+        Jitter source.
+    settings : ControllerSettings, optional
+    K : float, optional
+        Override every pair's K (training).
+    initial_force : float, optional
+        Override every note's initial force, N (training).
+    record_diagnostics : bool
+        Keep the instrument's per-hop contact diagnostics (for the evaluation; the
+        controller never sees them).
+
+    Returns
+    -------
+    PerformanceLog
+    """
+    n, n_strings = plan.bowed.shape
+    sr = instrument.sample_rate
+    listeners: dict[int, StreamingFeatures] = {}
+    controllers: dict[int, ForceController] = {}
+    current: dict[int, str] = {}
+    audio = np.zeros(n * HOP, np.float32)
+    force_log = np.zeros((n, n_strings))
+    vel_log = np.zeros((n, n_strings))
+    classes = np.zeros((n, n_strings), np.int64)
+    diag: dict[int, list] = {s: [] for s in range(n_strings)} if record_diagnostics else {}
+    features: dict[int, np.ndarray | None] = {}
+    jitter = (settings or ControllerSettings()).jitter
+    for k in range(n):
+        controls = {}
+        for s in np.flatnonzero(plan.bowed[k]):
+            s = int(s)
+            model = _model_for(models, s, str(plan.dynamic[k, s]))
+            ctl = controllers.get(s)
+            if ctl is None:
+                ctl = controllers[s] = ForceController(model, rng, settings, K=K)
+            if current.get(s) != model.dynamic:
+                ctl.set_model(model, K=K)
+                current[s] = model.dynamic
+            if plan.note_start[k, s]:
+                ctl.start_note(plan.semitones[k, s], initial_force)
+                features[s] = None
+            elif plan.finger_change[k, s]:
+                old = plan.semitones[k - 1, s] if k else plan.semitones[k, s]
+                ctl.rescale(model.initial_force(plan.semitones[k, s])
+                            / max(model.initial_force(old), 1e-9))
+            else:
+                speed = abs(float(plan.velocity[k - 1, s])) if k else 0.0
+                classes[k, s] = ctl.step(features.get(s), speed, float(plan.target_speed[k, s]))
+            v = float(plan.velocity[k, s])
+            if jitter:
+                v *= 1.0 + jitter * float(rng.standard_normal())
+            v = float(np.clip(v, -5.0, 5.0))
+            ratio = 1.0 - 2.0 ** (-float(plan.semitones[k, s]) / 12.0)
+            controls[s] = BowControl(v, ctl.force, float(plan.beta[k, s]), min(ratio, 0.8))
+            force_log[k, s] = ctl.force
+            vel_log[k, s] = v
+        plucks = plan.plucks[k] if plan.plucks else ()
+        block = instrument.process(HOP, controls, plucks=plucks)
+        if record_diagnostics:
+            for s, d in block.diagnostics.items():
+                diag[s].append((k, d))
+        audio[k * HOP:(k + 1) * HOP] = block.audio
+        for s in controls:
+            lis = listeners.get(s)
+            f0 = float(plan.expected_f0[k, s])
+            if lis is None:
+                lis = listeners[s] = StreamingFeatures(sr, yin_window=yin_window_for(f0, sr))
+            if plan.note_start[k, s]:
+                lis.reset()
+            feats = lis.push(block.audio, f0)
+            features[s] = feats if lis.ready else None
+    return PerformanceLog(audio, force_log, vel_log, classes, diag)
+
+
+def _model_for(models: dict[tuple[int, str], PairModel], string: int, dynamic: str) -> PairModel:
+    from synth.listening.classifier import DYNAMICS
+
+    if (string, dynamic) in models:
+        return models[(string, dynamic)]
+    order = DYNAMICS.index(dynamic) if dynamic in DYNAMICS else 2
+    candidates = [(abs(DYNAMICS.index(d) - order), d) for (s, d) in models if s == string]
+    if not candidates:
+        from synth.listening.classifier import ModelError
+
+        raise ModelError(f"no trained model for string {string} (any dynamic)")
+    return models[(string, min(candidates)[1])]
