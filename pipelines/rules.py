@@ -87,22 +87,21 @@ class Performance:
 
 
 def string_force_factors(instrument: str) -> np.ndarray:
-    """Per-string multipliers of the dynamic force table, which is written for the violin D.
+    """Reference force of each string (N): the unit of the dynamic force table.
 
-    Each string's playable window differs (the cello C string needs ~20x the violin D's
-    force); the factors are the instrument model's measured reference forces (middle of
-    each string's Helmholtz range, ``synth/config/strings.toml``) over the violin D's.
+    Each string's playable window differs (the cello C string needs ~10x the violin D's
+    force), so the table gives multiples of the instrument model's measured reference force
+    (middle of each string's Helmholtz range at beta 0.1 and 0.3 m/s,
+    ``synth/config/strings.toml``).
 
     Returns
     -------
-    np.ndarray [shape=(4,)]
-        Multipliers, lowest string first.
+    np.ndarray [shape=(4,)], N
+        Reference forces, lowest string first.
     """
     from synth.strings import load_instrument
 
-    reference = load_instrument("violin").strings[1].reference_force
-    return np.array([s.reference_force / reference
-                     for s in load_instrument(instrument).strings])
+    return np.array([s.reference_force for s in load_instrument(instrument).strings])
 
 
 def note_name(midi: float) -> str:

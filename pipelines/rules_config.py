@@ -124,7 +124,7 @@ def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.nda
     config : dict
         Rules configuration.
     key : str
-        ``beta``, ``velocity`` (m/s) or ``force`` (N).
+        ``beta``, ``velocity`` (m/s) or ``force`` (multiples of the string's reference force).
     level : np.ndarray [shape=(n,)]
         Dynamic levels on the 0..9 scale.
 
