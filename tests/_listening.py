@@ -1,0 +1,29 @@
+"""Shared settings of the listening tests: tiny training grids."""
+
+from synth.listening.training import TrainingSettings
+
+TINY = TrainingSettings(settle=0.5, record=0.3, band_clips=1, k_candidates=(1.03, 1.08),
+                        k_repeats=1, k_note=0.4, f_candidates=3, f_rounds=1, f_repeats=1,
+                        f_note=0.35)
+
+import pytest  # noqa: E402
+
+PAIR = (1, "mf")
+
+
+@pytest.fixture(scope="session")
+def models_dir(tmp_path_factory):
+    """Violin D-string mf pair trained with TINY grids (reused: training resumes)."""
+    from pipelines.train import train_instrument
+
+    out = tmp_path_factory.getbasetemp() / "listening-models"
+    train_instrument("violin", out, pairs=[PAIR], settings=TINY, workers=1, progress=False)
+    return out
+
+
+def d_string_notes():
+    """D4 E4 F#4 G4 at mf, one second each: all on the D string."""
+    from pipelines.feedback import scale_notes
+
+    notes = scale_notes(tonic=62, octaves=1)
+    return notes[notes["midi_pitch"] < 69].reset_index(drop=True)

@@ -1,0 +1,64 @@
+import librosa
+import numpy as np
+import pytest
+
+from synth.listening.features import (
+    FEATURE_NAMES,
+    HOP,
+    WINDOW,
+    StreamingFeatures,
+    batch_features,
+    frame_signal,
+    yin,
+)
+
+SR = 44100
+
+
+@pytest.fixture(scope="module")
+def signal():
+    rng = np.random.default_rng(0)
+    t = np.arange(SR // 2) / SR
+    return (0.3 * np.sin(2 * np.pi * 293.66 * t) + 0.1 * np.sin(2 * np.pi * 587.3 * t)
+            + 0.01 * rng.normal(size=t.size))
+
+
+def col(name):
+    return FEATURE_NAMES.index(name)
+
+
+def test_batch_features_match_librosa(signal):
+    f = batch_features(signal, 293.66, sample_rate=SR)
+    kw = dict(n_fft=WINDOW, hop_length=HOP, center=False)
+    np.testing.assert_allclose(f[:, col("centroid")],
+                               librosa.feature.spectral_centroid(y=signal, sr=SR, **kw)[0],
+                               rtol=1e-9)
+    np.testing.assert_allclose(f[:, col("rolloff")],
+                               librosa.feature.spectral_rolloff(y=signal, sr=SR, **kw)[0])
+    np.testing.assert_allclose(f[:, col("flatness")],
+                               librosa.feature.spectral_flatness(y=signal, **kw)[0], rtol=1e-9)
+    rms = librosa.feature.rms(y=signal, frame_length=WINDOW, hop_length=HOP, center=False)[0]
+    np.testing.assert_allclose(10 ** (f[:, col("rms_db")] / 20), rms, rtol=1e-6)
+    zcr = librosa.feature.zero_crossing_rate(signal, frame_length=WINDOW, hop_length=HOP,
+                                             center=False)[0]
+    np.testing.assert_allclose(f[:, col("zcr")], zcr)
+
+
+def test_streaming_equals_batch(signal):
+    f = batch_features(signal, 293.66, sample_rate=SR)
+    st = StreamingFeatures(SR)
+    rows = [st.push(signal[i:i + HOP], 293.66) for i in range(0, signal.size - HOP + 1, HOP)]
+    first = WINDOW // HOP - 1  # the first hop whose window is full
+    got = np.array(rows[first:])[: f.shape[0]]
+    np.testing.assert_allclose(got[1:], f[1:got.shape[0]], rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("f0", [196.0, 440.0, 1318.5])
+def test_yin_finds_the_pitch_and_clips_the_difference(f0):
+    t = np.arange(4096) / SR
+    y = np.sin(2 * np.pi * f0 * t) + 0.4 * np.sin(4 * np.pi * f0 * t)
+    pitch, aper = yin(frame_signal(y)[:2], np.full(2, f0), sample_rate=SR)
+    assert np.all(np.abs(1200 * np.log2(pitch / f0)) < 5)
+    assert np.all(aper < 0.05)
+    far = batch_features(y, f0 * 0.5 ** (5 / 12), sample_rate=SR)[:, col("pitch_diff")]
+    assert np.all(np.abs(far) <= 3.0)

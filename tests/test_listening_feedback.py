@@ -1,0 +1,50 @@
+import numpy as np
+import pytest
+from _listening import d_string_notes, models_dir  # noqa: F401
+
+from data_schemas.actions import validate_actions
+from pipelines.evaluate import evaluate
+from pipelines.feedback import render_feedback
+from pipelines.rules import perform_part
+from pipelines.rules_config import load_config
+from synth import render_with_diagnostics
+
+CFG = load_config()
+
+
+@pytest.fixture(scope="module")
+def feedback(models_dir):  # noqa: F811
+    return render_feedback(d_string_notes(), CFG, models_dir=models_dir, instrument="violin",
+                           seed=0)
+
+
+def test_feedback_render_records_what_it_played(feedback):
+    audio, actions, diagnostics, perf = feedback
+    validate_actions(actions)
+    assert audio.dtype == np.float32 and np.isfinite(audio).all()
+    bowed = actions[actions["bow_force"] > 0]
+    assert set(bowed["string"]) == {1}
+    # The force is the controller's: it varies from hop to hop (jitter, feedback).
+    assert bowed["bow_force"].diff().abs().median() > 0
+    # Velocity and beta are the rules' bow lane (mf: 0.33 m/s, beta 0.10), within jitter.
+    assert np.isclose(bowed["beta"].median(), 0.10)
+    assert abs(bowed["bow_velocity"].abs().max() - 0.33) < 0.03
+    assert set(diagnostics["string"]) == {1}
+
+
+def test_feedback_is_deterministic(models_dir, feedback):  # noqa: F811
+    again = render_feedback(d_string_notes(), CFG, models_dir=models_dir,
+                            instrument="violin", seed=0)
+    np.testing.assert_array_equal(again[0], feedback[0])
+
+
+def test_feedback_beats_wrong_fixed_forces(feedback):
+    audio, actions, diagnostics, _ = feedback
+    ours = evaluate(audio, actions, diagnostics=diagnostics)["piece"]["sustained_class3_share"]
+    perf = perform_part(d_string_notes(), CFG, instrument="violin")
+    for force in (0.08, 5.0):
+        wrong = perf.actions.copy()
+        wrong.loc[wrong["bow_force"] > 0, "bow_force"] = force
+        au, dg = render_with_diagnostics(wrong, instrument="violin", seed=0)
+        theirs = evaluate(au, wrong, diagnostics=dg)["piece"]["sustained_class3_share"]
+        assert ours > theirs + 0.2, (force, ours, theirs)

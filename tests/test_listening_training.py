@@ -1,0 +1,72 @@
+import json
+
+import numpy as np
+import pytest
+from _listening import PAIR, TINY, models_dir  # noqa: F401
+
+from data_schemas import ArcoError
+from pipelines.cli import main
+from pipelines.train import train_instrument
+from synth.listening.classifier import ModelError, load_models, load_pair, pair_key
+from synth.listening.training import attack_cost, clip_features, stability_cost
+
+
+def test_trained_pair_has_metadata_and_high_cv_accuracy(models_dir):  # noqa: F811
+    model = load_pair(models_dir, "violin", *PAIR)
+    meta = model.metadata
+    assert meta["complete"] and meta["cv_folds"] == 10
+    assert meta["cv_accuracy"] >= 0.95
+    assert set(meta["class_counts"]) == {"1", "2", "3", "4", "5"}
+    assert len(meta["initial_forces"]) == 3 and meta["K"] in TINY.k_candidates
+    assert len(meta["data_hash"]) == 16 and meta["feature_names"]
+    assert (models_dir / "labels.parquet").exists()
+
+
+def test_fast_predictor_agrees_with_sklearn(models_dir):  # noqa: F811
+    from synth.listening.clips import ClipSpec, render_clip
+    from synth.listening.training import JudgedClip
+
+    model = load_pair(models_dir, "violin", *PAIR)
+    clips = [JudgedClip(render_clip(ClipSpec("violin", 1, 0.0, f, 0.33, 0.1), settle=0.3,
+                                    context=0.05), 0) for f in (0.05, 0.6, 6.0)]
+    X, _, _ = clip_features(clips)
+    fast = model.fast()
+    assert [fast(x) for x in X] == model.predict(X).tolist()
+
+
+def test_resume_skips_finished_pairs(models_dir):  # noqa: F811
+    assert train_instrument("violin", models_dir, pairs=[PAIR], settings=TINY, workers=1,
+                            progress=False) == []
+
+
+def test_corrupted_model_gives_a_clear_error(models_dir, tmp_path, capsys):  # noqa: F811
+    import shutil
+
+    key = pair_key("violin", *PAIR)
+    for ext in ("joblib", "json"):
+        shutil.copy(models_dir / f"{key}.{ext}", tmp_path / f"{key}.{ext}")
+    (tmp_path / f"{key}.joblib").write_bytes(b"not a pickle at all")
+    with pytest.raises(ModelError, match="damaged model file"):
+        load_pair(tmp_path, "violin", *PAIR)
+    assert issubclass(ModelError, ArcoError)
+    meta = json.loads((tmp_path / f"{key}.json").read_text())
+    meta["sklearn_version"] = "0.21.3"
+    (tmp_path / f"{key}.json").write_text(json.dumps(meta))
+    with pytest.raises(ModelError, match="scikit-learn 0.21.3"):
+        load_pair(tmp_path, "violin", *PAIR)
+    (tmp_path / f"{key}.json").write_text("{broken")
+    with pytest.raises(ModelError, match="damaged model metadata"):
+        load_models(tmp_path, "violin")
+
+
+def test_costs_follow_the_paper():
+    assert stability_cost(np.array([3, 3, 3])) == 1.0
+    # [2, 3, 2] | [4, 5, 3] | [2]: (1 + 2) * (1 + 5) * (1 + 1)
+    assert stability_cost(np.array([2, 3, 2, 4, 5, 3, 2])) == 36.0
+    assert attack_cost(np.array([5, 4, 2] + [3] * 12)) == 4 + 1 + 1
+
+
+def test_train_cli_rejects_bad_input(tmp_path, capsys):
+    assert main(["train", "-o", str(tmp_path), "--teacher", "human"]) == 2
+    assert "needs --labels" in capsys.readouterr().err
+    assert main(["train", "-o", str(tmp_path), "--pairs", "9:mf"]) == 2
