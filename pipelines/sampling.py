@@ -1,0 +1,462 @@
+"""``--method sampling``: play a score with bowing gestures sampled from the gesture database.
+
+For each part the rules' front end (:func:`pipelines.rules.build_events`: range folding,
+string and finger choice, fermatas, slurs, bow directions, articulations) turns the notes
+into events; every bowed event becomes a sampling target (group = technique x direction x
+slur position x run position). The search (:mod:`gesture_db.search`) picks one database
+sample per target, :mod:`gesture_db.render` stretches and joins them into an actions table.
+Without listening models (or with ``feedback=False``) the actions play open loop through
+:func:`synth.render_actions`; with models the listening controller
+(:mod:`synth.listening.controller`) corrects the sampled force hop by hop: each string's
+:class:`~synth.listening.controller.ForceController` owns a correction factor (1 at every
+stroke start, updated by ``K**(3 - c_avg)`` from what it hears) that multiplies the sampled
+force, so the sampled contour keeps its shape while its level follows the ear.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.errors import ParameterError
+from data_schemas.sampling import validate_targets
+from pipelines.render import PartRender, RenderResult, choose_parts, mix
+from pipelines.rules import Event, Performance, build_events, fermata_warp
+
+#: Violin open-string length (m): effective string lengths are violin-equivalent.
+VIOLIN_STRING_LENGTH = 0.325
+#: Staccato notes shorter than this (s) are played spiccato (off the string).
+SPICCATO_BELOW = 0.2
+
+
+@dataclass
+class SamplingDatabase:
+    """A gesture database opened for sampling: search index, predictors and contours.
+
+    Build it once with :func:`open_database` and pass it to every render (the index and the
+    predictors are the expensive part).
+    """
+
+    db: Any
+    index: Any
+    predictors: Any
+    contours: Any
+    search_config: dict[str, Any]
+
+
+def open_database(path: str | os.PathLike, *, search_config: str | os.PathLike | None = None,
+                  predictors: bool = True, progress: bool = False) -> SamplingDatabase:
+    """Open a gesture database for sampling.
+
+    Parameters
+    ----------
+    path : path-like
+        Database directory (``arco build-db``).
+    search_config : path-like, optional
+        TOML merged over ``gesture_db/config/search.toml``.
+    predictors : bool
+        Load the per-group feature regressors (fitted and saved beside the database on
+        first use); False predicts each group's mean features.
+    progress : bool
+        Progress bar while fitting predictors.
+
+    Raises
+    ------
+    SchemaError
+        No database at ``path`` or one of another schema version.
+    """
+    from gesture_db.predict import load_or_fit_predictors
+    from gesture_db.render import ContourSource
+    from gesture_db.search import SearchIndex, load_search_config
+    from gesture_db.store import GestureDB
+
+    db = GestureDB(path)
+    pred = load_or_fit_predictors(db, progress=progress) if predictors else None
+    return SamplingDatabase(db, SearchIndex.from_db(db), pred, ContourSource(db),
+                            load_search_config(search_config))
+
+
+@dataclass
+class SampledPart(PartRender):
+    """A part rendered by sampling: also its targets, choices and contact diagnostics."""
+
+    targets: pd.DataFrame | None = None
+    choices: pd.DataFrame | None = None
+    diagnostics: pd.DataFrame | None = None
+    feedback: bool = False
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+def technique_of(e: Event) -> str:
+    """Bowing technique of an event: legato, staccato, spiccato, martele or detache."""
+    in_slur = e.slur_position in ("init", "mid", "end") and np.isfinite(e.slur)
+    if in_slur:
+        return "legato"
+    if e.stop:
+        return "spiccato" if (e.played_end - e.t0) < SPICCATO_BELOW else "staccato"
+    if e.accent > 1.0:
+        return "martele"
+    return "detache"
+
+
+def _position(prev: np.ndarray, nxt: np.ndarray) -> np.ndarray:
+    out = np.full(prev.size, "iso", dtype=object)
+    out[~prev & nxt] = "init"
+    out[prev & nxt] = "mid"
+    out[prev & ~nxt] = "end"
+    return out
+
+
+def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.DataFrame,
+                                                                          list[Event]]:
+    """Sampling targets of the bowed events of one part.
+
+    Parameters
+    ----------
+    events : list of Event
+        :func:`pipelines.rules.build_events` output.
+    notes : pandas.DataFrame
+        The notes the events index (for pitches).
+
+    Returns
+    -------
+    targets : pandas.DataFrame
+        :data:`data_schemas.sampling.SAMPLING_TARGETS`.
+    bowed : list of Event
+        The events of the targets, in the same order.
+    """
+    bowed = [e for e in events if not e.pizz]
+    if not bowed:
+        raise ParameterError("the part has no bowed notes to sample gestures for")
+    n = len(bowed)
+    rest_after = np.array([e.rest_after for e in bowed])
+    t0 = np.array([e.t0 for e in bowed])
+    joined_next = ~rest_after[:-1] & (np.abs(t0[1:] - np.array([e.end for e in bowed[:-1]]))
+                                      < 1e-3)
+    has_next = np.r_[joined_next, False]
+    has_prev = np.r_[False, joined_next]
+    run = _position(has_prev, has_next)
+    tech = np.array([technique_of(e) for e in bowed], object)
+    slur = np.array([e.slur_position if t == "legato" else "iso"
+                     for e, t in zip(bowed, tech, strict=True)], object)
+    # a slur position that the run breaks is re-derived from the neighbours in the slur
+    in_slur = tech == "legato"
+    prev_s = np.r_[False, in_slur[1:] & in_slur[:-1] & has_prev[1:]
+                   & np.array([b.cont for b in bowed[1:]])]
+    next_s = np.r_[prev_s[1:], False]
+    slur = np.where(in_slur, _position(prev_s, next_s), slur)
+    tech = np.where(in_slur & (slur == "iso"), "detache", tech)
+    played = np.array([max(e.played_end - e.t0, 1e-3) for e in bowed])
+    ioi = np.r_[t0[1:] - t0[:-1], np.inf]
+    duration = np.where(has_next, ioi, played)
+    pitch = notes["midi_pitch"].to_numpy()
+    top_pitch = np.array([int(pitch[e.rows].max()) for e in bowed])
+    semis = np.array([e.semitones[-1] for e in bowed])
+    fr = np.clip(1.0 - 2.0 ** (-semis / 12.0), 0.0, 0.8)
+    direction = np.where(np.array([e.direction for e in bowed]) < 0, "up", "down")
+    frame = pd.DataFrame({
+        "onset": t0, "duration": np.maximum(duration, 1e-3), "midi_pitch": top_pitch,
+        "string": [e.strings[-1] for e in bowed], "finger_ratio": fr,
+        "effective_string_length": VIOLIN_STRING_LENGTH * (1.0 - fr),
+        "dynamic": np.clip([e.dynamic for e in bowed], 0.0, 9.0), "technique": tech,
+        "bow_direction": direction, "slur_position": slur, "run_position": run})
+    frame["group"] = (frame["technique"] + "-" + frame["bow_direction"] + "-"
+                      + frame["slur_position"] + "-" + frame["run_position"])
+    del n
+    return validate_targets(frame, source="sampling targets"), bowed
+
+
+def _events_table(events: list[Event]) -> pd.DataFrame:
+    return pd.DataFrame({
+        "t0": [e.t0 for e in events], "played_end": [e.played_end for e in events],
+        "end": [e.end for e in events], "label": [e.label for e in events],
+        "direction": [0 if e.pizz else e.direction for e in events],
+        "string": [e.strings[-1] for e in events], "dynamic": [e.dynamic for e in events]})
+
+
+def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
+    """Plucks of pizzicato events and the lower strings of double stops (same bowing)."""
+    frames = [actions]
+    for e in events:
+        if e.pizz:
+            for j, (s, semis) in enumerate(zip(e.strings, e.semitones, strict=True)):
+                t = e.t0 + 0.01 * j
+                fr = min(1.0 - 2.0 ** (-semis / 12.0), 0.8)
+                frames.append(pd.DataFrame({
+                    "time": [t, max(e.end - 1e-3, t)], "string": s, "finger_ratio": fr,
+                    "bow_force": 0.0, "bow_velocity": 0.0, "beta": 0.12, "bow_position": 0.5,
+                    "pluck": [True, False]}))
+            continue
+        top = e.strings[-1]
+        for s, semis in zip(e.strings[:-1], e.semitones[:-1], strict=True):
+            rows = actions[(actions["string"] == top) & (actions["time"] >= e.t0)
+                           & (actions["time"] <= e.end)].copy()
+            if rows.empty:
+                continue
+            rows["string"] = s
+            rows["finger_ratio"] = min(1.0 - 2.0 ** (-semis / 12.0), 0.8)
+            lift = rows.iloc[[0, -1]].copy()
+            lift["time"] = [max(float(rows["time"].iloc[0]) - 1e-3, 0.0),
+                            float(rows["time"].iloc[-1]) + 1e-3]
+            lift["bow_force"] = 0.0
+            lift["bow_velocity"] = 0.0
+            frames += [rows, lift]
+    if len(frames) == 1:
+        return actions
+    from data_schemas.actions import validate_actions
+
+    table = pd.concat(frames, ignore_index=True).sort_values("time", kind="stable")
+    return validate_actions(table.reset_index(drop=True), source="gesture sampling")
+
+
+def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[str, Any], *,
+                instrument: str | None = None, warp=None, transpose_octaves: bool = False,
+                rng: np.random.Generator | None = None) -> tuple[Performance, pd.DataFrame,
+                                                                  pd.DataFrame]:
+    """Sampled actions of one part (no audio).
+
+    Returns
+    -------
+    performance : Performance
+        Actions, events (for plots) and warnings.
+    targets : pandas.DataFrame
+        The sampling targets.
+    choices : pandas.DataFrame
+        The samples chosen (:data:`data_schemas.sampling.SAMPLE_CHOICES`).
+    """
+    from gesture_db.render import render_samples
+    from gesture_db.search import search
+    from pipelines.instruments import choose_strings, fit_range, get_instrument
+
+    name = instrument or str(notes["instrument"].iloc[0])
+    inst = get_instrument(name)
+    notes = notes.sort_values(["onset_beats", "grace", "midi_pitch"],
+                              ascending=[True, False, True], kind="stable")
+    notes = fit_range(notes.reset_index(drop=True), inst, transpose_octaves=transpose_octaves)
+    strings = choose_strings(notes, inst)
+    if warp is None:
+        warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    events = build_events(notes, strings, config, warp=warp, skill=3, rng=rng)
+    targets, _bowed = targets_from_events(events, notes)
+    result = search(targets, database.index, predictors=database.predictors,
+                    config=database.search_config)
+    actions = render_samples(targets, result.choices, database.contours)
+    actions = _extra_rows(actions, events)
+    warnings = [f"note group {g} is not in the database; sampled from {r}"
+                for g, r in sorted(result.fallbacks.items())]
+    return Performance(actions, _events_table(events), warnings), targets, result.choices
+
+
+def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingDatabase,
+                    models: str | os.PathLike | None = None, feedback: bool = True,
+                    parts: list[int] | None = None, instrument: str | None = None,
+                    config: dict[str, Any] | None = None, seed: int = 0,
+                    sample_rate: int = 44100, transpose_octaves: bool = False,
+                    audio: bool = True, diagnostics: bool = False,
+                    progress: bool | None = None) -> RenderResult:
+    """Play the chosen parts with gestures sampled from a database.
+
+    Parameters
+    ----------
+    notes : pandas.DataFrame
+        The notes table of the whole score (fermatas of every part make every part wait).
+    db : path-like or SamplingDatabase
+        The gesture database (a directory, or one opened with :func:`open_database`).
+    models : path-like, optional
+        Directory of trained listening models (``arco train``); with ``feedback`` the
+        controller corrects the sampled force.
+    feedback : bool
+        Use the models (False: open loop even when models are given).
+    parts : list of int, optional
+        Part indices (default: the first part, as ``arco render``).
+    instrument : str, optional
+        Override the instrument (only with one part).
+    config : dict, optional
+        Rules configuration for the front end (fermatas, articulations); default shipped.
+    seed : int
+        Seed of the synthesizer and of the controller's jitter.
+    sample_rate : int, Hz
+    transpose_octaves : bool
+        Fold out-of-range notes by octaves instead of failing.
+    audio : bool
+        Synthesize (False: actions only).
+    diagnostics : bool
+        Keep the instrument's contact diagnostics per part (for the evaluation).
+    progress : bool, optional
+        Progress bar (default: when stderr is a terminal).
+
+    Returns
+    -------
+    RenderResult
+        Its parts are :class:`SampledPart`.
+
+    Raises
+    ------
+    SchemaError
+        No database at ``db`` or one of another schema version.
+    EmptyGroupsError
+        Notes whose groups (and every compatible group) are empty in the database.
+    """
+    from tqdm import tqdm
+
+    from pipelines.rules_config import load_config
+
+    if sample_rate <= 0:
+        raise ParameterError(f"sample_rate={sample_rate} must be > 0")
+    parts = parts if parts is not None else choose_parts(notes, None, False)
+    if instrument is not None and len(parts) > 1:
+        raise ParameterError("--instrument applies to a single part (drop --all-parts)")
+    database = db if isinstance(db, SamplingDatabase) else open_database(db)
+    config = config or load_config()
+    warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    closed = bool(models) and feedback
+    show = sys.stderr.isatty() if progress is None else progress
+    result = RenderResult(None, sample_rate)
+    for index in tqdm(parts, desc="sampling", unit="part", disable=not show):
+        part = notes[notes["part_index"] == index]
+        name = instrument or str(part["instrument"].iloc[0])
+        perf, targets, choices = sample_part(part, database, config, instrument=name, warp=warp,
+                                             transpose_octaves=transpose_octaves)
+        rendered = SampledPart(index, str(part["part_name"].iloc[0]), name, perf,
+                               targets=targets, choices=choices, feedback=closed)
+        if audio and closed:
+            y, played, diag = correct_force(perf, models, instrument=name,
+                                            sample_rate=sample_rate, seed=seed)
+            rendered.audio = y
+            rendered.extras["sampled_actions"] = perf.actions
+            rendered.performance = Performance(played, perf.events, perf.warnings)
+            rendered.diagnostics = diag
+        elif audio:
+            from synth import render_with_diagnostics
+
+            y, diag = render_with_diagnostics(perf.actions, instrument=name,
+                                              sample_rate=sample_rate, seed=seed,
+                                              diagnostics=diagnostics)
+            rendered.audio = np.asarray(y, np.float32)
+            rendered.diagnostics = diag
+        result.parts.append(rendered)
+    if audio:
+        result.audio = mix([p.audio for p in result.parts])
+    return result
+
+
+# --------------------------------------------------------------------------- feedback
+
+
+def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrument: str,
+                  sample_rate: int = 44100, seed: int = 0
+                  ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame]:
+    """Play sampled actions with the listening controller correcting the force hop by hop.
+
+    The single integration point with :mod:`synth.listening.controller`: the hop plan of the
+    sampled actions comes from :func:`pipelines.feedback.hop_plan`; per string a
+    :class:`~synth.listening.controller.ForceController` (no range clamp) holds a
+    correction factor that starts at 1 on every stroke and is multiplied by
+    ``K**(3 - c_avg)`` from the classes it hears; the force played is the sampled force
+    times that factor (clipped to 0..50 N).
+
+    Returns
+    -------
+    audio : np.ndarray [shape=(n,)], float32
+    actions : pandas.DataFrame
+        What was played (one frame per hop per string).
+    diagnostics : pandas.DataFrame
+        Contact diagnostics per hop per string.
+    """
+    from pipelines.feedback import TAIL, diagnostics_table, hop_plan, played_actions
+    from pipelines.rules_config import load_config
+    from synth.instrument import BowControl, Instrument
+    from synth.listening.classifier import load_models
+    from synth.listening.controller import (
+        ControllerSettings,
+        ForceController,
+        PerformanceLog,
+        _model_for,
+    )
+    from synth.listening.features import HOP, StreamingFeatures, yin_window_for
+
+    if sample_rate not in (44100, 48000):
+        raise ParameterError(f"sample_rate={sample_rate}: feedback control needs 44100 or "
+                             "48000 Hz")
+    if not Path(models_dir).is_dir():
+        raise ParameterError(f"--models {models_dir}: no such directory (train models with "
+                             "arco train, or play open loop with --no-feedback)")
+    plan, span = hop_plan(perf, load_config(), instrument, sample_rate=sample_rate)
+    models = load_models(models_dir, instrument)
+    n, n_strings = plan.bowed.shape
+    t = (np.arange(n) + 1) * HOP / sample_rate
+    sampled = np.zeros((n, n_strings))
+    target_speed = np.zeros((n, n_strings))
+    actions = perf.actions
+    for s, rows in actions[~actions["pluck"]].groupby("string"):
+        time = rows["time"].to_numpy(np.float64)
+        sampled[:, int(s)] = np.interp(t, time, rows["bow_force"].to_numpy(np.float64))
+        speed = np.abs(plan.velocity[:, int(s)])
+        # planned speed of each stroke: its peak speed (the sampled gesture's own target)
+        stroke = np.cumsum(plan.note_start[:, int(s)])
+        peak = pd.Series(speed).groupby(stroke).transform("max").to_numpy()
+        target_speed[:, int(s)] = peak
+    settings = ControllerSettings(range_margin=0.0)
+    rng = np.random.default_rng([seed, 2])
+    inst = Instrument(instrument, sample_rate=sample_rate, seed=seed)
+    controllers: dict[int, ForceController] = {}
+    listeners: dict[int, StreamingFeatures] = {}
+    features: dict[int, np.ndarray | None] = {}
+    current: dict[int, str] = {}
+    audio = np.zeros(n * HOP, np.float32)
+    force_log = np.zeros((n, n_strings))
+    vel_log = np.zeros((n, n_strings))
+    classes = np.zeros((n, n_strings), np.int64)
+    diag: dict[int, list] = {s: [] for s in range(n_strings)}
+    for k in range(n):
+        controls = {}
+        for s in np.flatnonzero(plan.bowed[k]):
+            s = int(s)
+            model = _model_for(models, s, str(plan.dynamic[k, s]))
+            ctl = controllers.get(s)
+            if ctl is None:
+                ctl = controllers[s] = ForceController(model, rng, settings)
+            if current.get(s) != model.dynamic:
+                ctl.set_model(model)
+                current[s] = model.dynamic
+            if plan.note_start[k, s]:
+                ctl.start_note(plan.semitones[k, s], force=1.0)
+                features[s] = None
+            elif not plan.finger_change[k, s]:
+                speed = abs(float(plan.velocity[k - 1, s])) if k else 0.0
+                classes[k, s] = ctl.step(features.get(s), speed, float(target_speed[k, s]))
+            force = float(np.clip(sampled[k, s] * ctl.force, 0.0, 50.0))
+            v = float(np.clip(plan.velocity[k, s], -5.0, 5.0))
+            ratio = min(1.0 - 2.0 ** (-float(plan.semitones[k, s]) / 12.0), 0.8)
+            controls[s] = BowControl(v, force, float(plan.beta[k, s]), ratio)
+            force_log[k, s] = force
+            vel_log[k, s] = v
+        block = inst.process(HOP, controls, plucks=plan.plucks[k] if plan.plucks else ())
+        for s, d in block.diagnostics.items():
+            diag[s].append((k, d))
+        audio[k * HOP:(k + 1) * HOP] = block.audio
+        for s in controls:
+            f0 = float(plan.expected_f0[k, s])
+            lis = listeners.get(s)
+            if lis is None:
+                lis = listeners[s] = StreamingFeatures(sample_rate,
+                                                       yin_window=yin_window_for(f0, sample_rate))
+            if plan.note_start[k, s]:
+                lis.reset()
+            feats = lis.push(block.audio, f0)
+            features[s] = feats if lis.ready else None
+    tail = inst.process(int(TAIL * sample_rate), {}).audio
+    log = PerformanceLog(audio, force_log, vel_log, classes, diag)
+    played = played_actions(perf, plan, span, log, sample_rate=sample_rate)
+    y = np.concatenate([audio, tail]).astype(np.float32)
+    return y, played, diagnostics_table(log, sample_rate)
+
+
+__all__ = ["SampledPart", "SamplingDatabase", "correct_force", "open_database",
+           "render_sampling", "sample_part", "targets_from_events", "technique_of"]
