@@ -75,7 +75,8 @@ SAMPLE_CHOICES = TableSpec(
                "Weighted continuity cost at the junction with the previous sample.",
                minimum=0.0),
         Column("gesture_cost", pa.float64(), "1",
-               "Unweighted Mahalanobis distance between predicted and sample features.",
+               "Unweighted Mahalanobis distance between predicted and sample features, divided "
+               "by the square root of the feature dimension.",
                minimum=0.0),
     ),
 )

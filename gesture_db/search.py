@@ -6,10 +6,13 @@ database notes of its group; when the group is empty, those of the nearest compa
 candidate q for note m is
 
     w_b (w_D |log2(D_m / D_q)| + w_le |log2(le_m / le_q)| + w_d min(|d_m - d_q| / span, 1)
-         + w_s |s_m - s_q| / 3) + w_g Mahalanobis(f_pred_m, f_q; Sigma_G) + w_fb dist(G),
+         + w_s |s_m - s_q| / 3) + w_g Mahalanobis(f_pred_m, f_q; Sigma_G) / sqrt(k)
+    + w_fb dist(G),
 
-computed for all candidates of a group at once; the ``n_best`` cheapest per note go to the
-Viterbi search (:mod:`gesture_db.search_kernel`), which adds ``w_b w_c`` times the
+computed for all candidates of a group at once. The Mahalanobis distance is divided by the
+square root of the feature dimension k (a typical sample of the group then costs about 1,
+like a factor of two in duration), so groups of different k weigh alike; the ``n_best``
+cheapest per note go to the Viterbi search (:mod:`gesture_db.search_kernel`), which adds ``w_b w_c`` times the
 continuity cost at every junction without a rest (L1 of the jumps in velocity, force and
 beta between the end of one sample and the start of the next, in units of
 ``continuity_scale``). Weights live in ``gesture_db/config/search.toml``.
@@ -404,7 +407,7 @@ def _target_costs(t: pd.DataFrame, pred: np.ndarray, gi: GroupIndex,
     pw = np.asarray(pred, np.float64) @ gi.whiten
     d2 = (np.sum(pw**2, axis=1)[:, None] + np.sum(gi.whitened**2, axis=1)[None, :]
           - 2.0 * pw @ gi.whitened.T)
-    cg = np.sqrt(np.maximum(d2, 0.0))
+    cg = np.sqrt(np.maximum(d2, 0.0) / pw.shape[1])
     return w["basic"] * basic + w["gesture"] * cg, cg
 
 

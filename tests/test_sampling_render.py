@@ -1,0 +1,191 @@
+"""Gesture sampling: stretch, join, reproduction of a take, rendering a score, clear errors."""
+
+import json
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from data_schemas.errors import ArcoError, SchemaError
+from gesture_db.join import Piece, join_run
+from gesture_db.stretch import edge_length, stretch, warp
+
+
+@pytest.fixture(scope="session")
+def tiny_db(tmp_path_factory):
+    """A database of one simulated 300-note take, with predictors saved beside it."""
+    from gesture_db.build import build_database
+    from gesture_db.predict import fit_predictors, save_predictors
+    from gesture_db.simulate import simulate_recordings
+    from gesture_db.store import GestureDB
+
+    base = tmp_path_factory.mktemp("sampling")
+    rec = base / "rec"
+    simulate_recordings(300, 2, rec, seed=11, notes_per_take=150)
+    build_database([rec], base / "db", workers=1, progress=False)
+    db = GestureDB(base / "db")
+    save_predictors(fit_predictors(db, max_folds=2), db.path)
+    return base
+
+
+def _targets(annotation: pd.DataFrame) -> pd.DataFrame:
+    fr = annotation["finger_ratio"].to_numpy(np.float64)
+    t = pd.DataFrame(dict(
+        onset=annotation["true_onset"], duration=annotation["true_offset"]
+        - annotation["true_onset"], midi_pitch=annotation["midi_pitch"],
+        string=annotation["string"], finger_ratio=fr, effective_string_length=0.325 * (1 - fr),
+        dynamic=annotation["dynamic"], technique=annotation["technique"],
+        bow_direction=annotation["bow_direction"], slur_position=annotation["slur_position"],
+        run_position=annotation["run_position"]))
+    t["group"] = (t["technique"] + "-" + t["bow_direction"] + "-" + t["slur_position"] + "-"
+                  + t["run_position"])
+    return t
+
+
+# --------------------------------------------------------------------------- stretch
+
+
+@pytest.mark.parametrize("factor", [0.45, 0.8, 1.7, 3.0])
+def test_stretch_keeps_attack_and_release(factor):
+    fs = 1000.0
+    Ds = 0.5
+    ts = np.arange(0, Ds + 1e-9, 1 / fs)
+    # attack, wobbly sustain, release
+    y = np.minimum(ts / 0.04, 1) * np.minimum((Ds - ts) / 0.05, 1) * (1 + 0.2 * np.sin(30 * ts))
+    Dt = factor * Ds
+    e = edge_length(Dt, Ds)
+    tt = np.arange(0, Dt + 1e-9, 1 / fs)
+    out = stretch(ts, y, Dt, tt)
+    head = tt <= e
+    tail = tt >= Dt - e
+    np.testing.assert_allclose(out[head], np.interp(tt[head], ts, y), atol=1e-12)
+    np.testing.assert_allclose(out[tail], np.interp(Ds - (Dt - tt[tail]), ts, y), atol=1e-12)
+    u = warp(tt, Dt, Ds)
+    assert u[0] == 0 and u[-1] == pytest.approx(Ds) and np.all(np.diff(u) >= 0)
+    assert out.max() <= y.max() + 1e-12 and out.min() >= y.min() - 1e-12
+
+
+# --------------------------------------------------------------------------- join
+
+
+def _const_piece(t0, t1, start, end, direction):
+    def signal(t):
+        u = np.clip((np.asarray(t) - t0) / (t1 - t0), 0, 1)[:, None]
+        return np.asarray(start)[None, :] * (1 - u) + np.asarray(end)[None, :] * u
+
+    return Piece(t0, t1, signal, direction)
+
+
+@pytest.mark.parametrize("bow_change", [True, False])
+def test_joined_signals_are_continuous(bow_change):
+    d2 = -1 if bow_change else 1
+    a = _const_piece(0.0, 0.4, [0.3, 0.8, 0.10], [0.12, 0.9, 0.11], 1)
+    b = _const_piece(0.4, 0.8, [0.2 * d2, 0.5, 0.07], [0.3 * d2, 0.55, 0.07], d2)
+    fs = 10000.0
+    t = np.arange(0, 0.8 + 1e-12, 1 / fs)
+    out = join_run([a, b], t)
+    naive = np.where((t < 0.4)[:, None], a.signal(t), b.signal(t))
+    jump_naive = np.abs(np.diff(naive, axis=0)).max(axis=0)
+    jump = np.abs(np.diff(out, axis=0)).max(axis=0)
+    # force and beta: no step; the largest frame-to-frame change is a small share of the gap
+    assert np.all(jump[1:] < 0.01 * jump_naive[1:])
+    assert jump[0] < 0.002 * 0.3 * fs / 100 + 1e-3  # velocity changes by < 3 mm/s per 0.1 ms
+    if bow_change:
+        k = np.searchsorted(t, 0.4)
+        assert out[k, 0] == pytest.approx(0.0, abs=1e-12)
+        assert np.all(out[:k, 0] >= 0) and np.all(out[k + 1:, 0] <= 0)
+    # away from the junction each sample is untouched
+    far = (np.abs(t - 0.4) > 0.031)
+    np.testing.assert_allclose(out[far], naive[far], atol=1e-12)
+
+
+# --------------------------------------------------------------------------- reproduction
+
+
+def test_rendering_a_take_from_its_own_database_reproduces_it(tiny_db):
+    from data_schemas.annotation import read_annotation
+    from data_schemas.recording import read_recording
+    from gesture_db.predict import load_predictors
+    from gesture_db.render import ContourSource, render_samples
+    from gesture_db.search import SearchIndex, search
+    from gesture_db.store import GestureDB
+
+    db = GestureDB(tiny_db / "db")
+    take = sorted((tiny_db / "rec").glob("*take000.annotation.parquet"))[0]
+    ann = read_annotation(take)
+    rec = read_recording(str(take).replace(".annotation", ""))
+    targets = _targets(ann)
+    result = search(targets, SearchIndex.from_db(db), predictors=load_predictors(db))
+    actions = render_samples(targets, result.choices, ContourSource(db))
+    assert actions["bow_position"].between(0, 1).all()
+    t = rec["time"].to_numpy()
+    inside = np.zeros(t.size, bool)
+    for a, b in zip(targets["onset"], targets["onset"] + targets["duration"], strict=True):
+        inside |= (t >= a + 0.01) & (t < b - 0.01)
+    played = actions.groupby("time").max()
+    for column, worst in (("bow_velocity", 0.2), ("bow_force", 0.3), ("beta", 0.3)):
+        x = rec[column].to_numpy()[inside]
+        y = np.interp(t[inside], played.index.to_numpy(), played[column].to_numpy())
+        nrmse = np.sqrt(np.mean((x - y) ** 2)) / np.std(x)
+        assert nrmse < worst, (column, nrmse)
+
+
+# --------------------------------------------------------------------------- pipelines
+
+
+@pytest.fixture(scope="module")
+def scale():
+    from pipelines.feedback import scale_notes
+
+    return scale_notes(tonic=62, octaves=1, tempo=120.0)
+
+
+def test_render_sampling_open_loop(tiny_db, scale):
+    from pipelines.sampling import open_database, render_sampling
+
+    sdb = open_database(tiny_db / "db")
+    result = render_sampling(scale, db=sdb, feedback=False, progress=False, diagnostics=True)
+    part = result.parts[0]
+    assert len(part.targets) == len(scale)
+    assert part.performance.actions["bow_position"].between(0, 1).all()
+    assert result.audio.size > 4 * 44100 and np.abs(result.audio).max() > 0
+    assert part.diagnostics is not None and len(part.diagnostics)
+    again = render_sampling(scale, db=sdb, feedback=False, progress=False, audio=False)
+    pd.testing.assert_frame_equal(again.parts[0].performance.actions,
+                                  part.performance.actions)
+
+
+def test_missing_database_is_a_clear_error(tmp_path, scale):
+    from pipelines.sampling import render_sampling
+
+    with pytest.raises(SchemaError, match="no gesture database"):
+        render_sampling(scale, db=tmp_path / "nowhere", audio=False)
+
+
+def test_database_of_another_schema_version_is_a_clear_error(tiny_db, tmp_path, scale):
+    from pipelines.sampling import render_sampling
+
+    old = tmp_path / "old"
+    shutil.copytree(tiny_db / "db", old)
+    manifest = json.loads((old / "manifest.json").read_text())
+    manifest["schema_version"] = "0.3"
+    (old / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(SchemaError, match="schema version 0.3"):
+        render_sampling(scale, db=old, audio=False)
+
+
+def test_score_whose_groups_are_all_empty_is_a_clear_error(tiny_db):
+    from data_schemas.annotation import read_annotation
+    from gesture_db.search import EmptyGroupsError, SearchIndex, search
+    from gesture_db.store import GestureDB
+
+    index = SearchIndex.from_db(GestureDB(tiny_db / "db"))
+    legato = SearchIndex({g: i for g, i in index.groups.items() if g.startswith("legato")},
+                         source="legato-only")
+    ann = read_annotation(sorted((tiny_db / "rec").glob("*.annotation.parquet"))[0])
+    spiccato = _targets(ann[ann["technique"] == "spiccato"].reset_index(drop=True))
+    assert len(spiccato)
+    with pytest.raises(EmptyGroupsError, match="no compatible samples for note group") as err:
+        search(spiccato, legato)
+    assert isinstance(err.value, ArcoError) and "spiccato" in str(err.value)
