@@ -12,10 +12,10 @@ candidate q for note m is
 computed for all candidates of a group at once. The Mahalanobis distance is divided by the
 square root of the feature dimension k (a typical sample of the group then costs about 1,
 like a factor of two in duration), so groups of different k weigh alike; the ``n_best``
-cheapest per note go to the Viterbi search (:mod:`gesture_db.search_kernel`), which adds ``w_b w_c`` times the
-continuity cost at every junction without a rest (L1 of the jumps in velocity, force and
-beta between the end of one sample and the start of the next, in units of
-``continuity_scale``). Weights live in ``gesture_db/config/search.toml``.
+cheapest per note go to the Viterbi search (:mod:`gesture_db.search_kernel`), which adds
+``w_b w_c`` times the continuity cost at every junction without a rest (L1 of the jumps
+in velocity, force and beta between the end of one sample and the start of the next, in
+units of ``continuity_scale``). Weights live in ``gesture_db/config/search.toml``.
 """
 
 from __future__ import annotations
