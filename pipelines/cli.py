@@ -25,6 +25,7 @@ COMMAND_MODULES = (
     "pipelines.commands.db",
     "pipelines.commands.train",
     "pipelines.commands.evaluate",
+    "pipelines.commands.compare",
 )
 
 EXIT_USAGE = 2
