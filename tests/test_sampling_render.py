@@ -189,3 +189,44 @@ def test_score_whose_groups_are_all_empty_is_a_clear_error(tiny_db):
     with pytest.raises(EmptyGroupsError, match="no compatible samples for note group") as err:
         search(spiccato, legato)
     assert isinstance(err.value, ArcoError) and "spiccato" in str(err.value)
+
+
+# --------------------------------------------------------------------------- compare CLI
+
+
+def test_arco_compare_writes_the_report(tiny_db, tmp_path, capsys):
+    from importlib import resources
+
+    from pipelines.cli import main
+
+    score = str(resources.files("pipelines").joinpath("data/mozart-k421.mxl"))
+    out = tmp_path / "report"
+    assert main(["compare", score, "--methods", "rules,sampling-open", "--db",
+                 str(tiny_db / "db"), "-o", str(out), "--start-measure", "1",
+                 "--end-measure", "2", "--quiet"]) == 0
+    results = json.loads((out / "results.json").read_text())
+    assert set(results) == {"rules", "sampling-open"}
+    piece = results["sampling-open"]["mozart-k421"]
+    assert piece["notes"] > 0 and piece["render_seconds"] > 0 and "helmholtz_share" in piece
+    assert (out / "results.csv").read_text().count("\n") == 3
+    page = (out / "index.html").read_text()
+    assert "<audio" in page and "wins on" in page
+    assert (out / "audio" / "mozart-k421-sampling-open.wav").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--methods", "sampling-open", "--db", "NOWHERE"], "no gesture database"),
+    (["--methods", "sampling-open"], "need --db"),
+    (["--methods", "feedback"], "need --models"),
+    (["--methods", "bogus"], "unknown"),
+])
+def test_arco_compare_errors_are_one_line(tmp_path, capsys, args, message):
+    from importlib import resources
+
+    from pipelines.cli import main
+
+    score = str(resources.files("pipelines").joinpath("data/mozart-k421.mxl"))
+    args = [a.replace("NOWHERE", str(tmp_path / "nowhere")) for a in args]
+    assert main(["compare", score, *args, "-o", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and message in err and err.startswith("arco compare: error:")
