@@ -23,6 +23,7 @@ from data_schemas.notes import (
     write_notes,
 )
 from data_schemas.recording import RECORDING, read_recording, write_recording
+from data_schemas.sampling import SAMPLE_CHOICES, SAMPLING_TARGETS, validate_targets
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
 __all__ = [
@@ -32,6 +33,9 @@ __all__ = [
     "DB_NOTES",
     "GESTURE_DB_VERSION",
     "RECORDING",
+    "SAMPLE_CHOICES",
+    "SAMPLING_TARGETS",
+    "validate_targets",
     "read_annotation",
     "read_recording",
     "write_annotation",
