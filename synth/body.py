@@ -14,6 +14,7 @@ import numpy as np
 import scipy.fft
 import scipy.signal
 import soundfile as sf
+from numba import njit
 
 from data_schemas.errors import ParameterError
 
@@ -106,46 +107,97 @@ def load_body_ir(path: str | os.PathLike, sample_rate: int) -> np.ndarray:
     return ir / np.sqrt(energy)
 
 
-class BlockConvolver:
-    """Streaming FIR convolution (overlap-add) of consecutive blocks with a fixed response.
+@njit(cache=True)
+def _ring_multiply_add(ring, head, parts, out):  # pragma: no cover - numba
+    """Sum over partitions p of ring[(head + p) % P] * parts[p], into ``out`` (spectra)."""
+    n_parts = parts.shape[0]
+    out[:] = 0.0
+    for p in range(n_parts):
+        row = ring[(head + p) % n_parts]
+        part = parts[p]
+        for k in range(out.size):
+            out[k] += row[k] * part[k]
 
-    Each block is convolved by FFT with the response's spectrum, cached per FFT size, so
-    the loop's small blocks and the renderer's large chunks both cost one FFT pair.
+
+class BlockConvolver:
+    """Streaming FIR convolution of consecutive blocks with a fixed response.
+
+    Blocks of :attr:`partition` samples (the listening loop's hop) go through a uniformly
+    partitioned frequency-domain convolution: one FFT pair of twice the block size plus one
+    spectral multiply-add per partition of the response. Blocks of any other size go
+    through one FFT overlap-save convolution against the kept input history. Both paths
+    read the same history, so callers may mix block sizes.
 
     Parameters
     ----------
     response : np.ndarray [shape=(m,)]
         The impulse response.
+    partition : int
+        Block size of the partitioned path, samples.
     """
 
-    def __init__(self, response: np.ndarray) -> None:
+    def __init__(self, response: np.ndarray, partition: int = 256) -> None:
         self.response = np.asarray(response, dtype=np.float64)
-        self._tail = np.zeros(self.response.size - 1)
+        self.partition = int(partition)
+        n_parts = -(-self.response.size // self.partition)
+        padded = np.zeros(n_parts * self.partition)
+        padded[: self.response.size] = self.response
+        self._part_spectra = scipy.fft.rfft(
+            np.pad(padded.reshape(n_parts, self.partition), ((0, 0), (0, self.partition))),
+            axis=1)
+        self._history = np.zeros(max(self.response.size - 1, (n_parts + 1) * self.partition))
         self._spectra: dict[int, np.ndarray] = {}
+        self._fdl: np.ndarray | None = None
+        self._head = 0
 
     def reset(self) -> None:
         """Forget the ringing of earlier blocks."""
-        self._tail[:] = 0.0
-
-    def _spectrum(self, n_fft: int) -> np.ndarray:
-        spectrum = self._spectra.get(n_fft)
-        if spectrum is None:
-            spectrum = self._spectra[n_fft] = scipy.fft.rfft(self.response, n_fft)
-        return spectrum
+        self._history[:] = 0.0
+        self._fdl = None
 
     def process(self, block: np.ndarray) -> np.ndarray:
         """Convolve the next ``block`` and return as many output samples as it has."""
         if block.size == 0:
             return np.zeros(0)
-        n_full = block.size + self.response.size - 1
-        n_fft = scipy.fft.next_fast_len(n_full, real=True)
-        spectrum = scipy.fft.rfft(block, n_fft) * self._spectrum(n_fft)
-        full = scipy.fft.irfft(spectrum, n_fft)[:n_full]
-        full[: self._tail.size] += self._tail
-        out = full[: block.size]
-        rest = full[block.size:]
-        if rest.size >= self._tail.size:
-            self._tail = rest[: self._tail.size].copy()
-        else:
-            self._tail = np.concatenate([rest, np.zeros(self._tail.size - rest.size)])
+        out = (self._partitioned(block) if block.size == self.partition
+               else self._overlap_save(block))
+        self._remember(block)
         return out
+
+    def _remember(self, block: np.ndarray) -> None:
+        n = min(block.size, self._history.size)
+        self._history[:-n] = self._history[n:]
+        self._history[-n:] = block[block.size - n:]
+
+    def _overlap_save(self, block: np.ndarray) -> np.ndarray:
+        m = self.response.size
+        signal = np.concatenate([self._history[self._history.size - (m - 1):], block])
+        n_fft = scipy.fft.next_fast_len(signal.size, real=True)
+        spectrum = self._spectra.get(n_fft)
+        if spectrum is None:
+            spectrum = self._spectra[n_fft] = scipy.fft.rfft(self.response, n_fft)
+        full = scipy.fft.irfft(scipy.fft.rfft(signal, n_fft) * spectrum, n_fft)
+        self._fdl = None  # the partitioned path rebuilds its spectra from the history
+        return full[m - 1: m - 1 + block.size]
+
+    def _partitioned(self, block: np.ndarray) -> np.ndarray:
+        b = self.partition
+        n_parts = self._part_spectra.shape[0]
+        if self._fdl is None:
+            self._rebuild_fdl()
+        previous = self._history[self._history.size - b:]
+        self._head = (self._head - 1) % n_parts
+        self._fdl[self._head] = scipy.fft.rfft(np.concatenate([previous, block]))
+        spectrum = np.empty(b + 1, np.complex128)
+        _ring_multiply_add(self._fdl, self._head, self._part_spectra, spectrum)
+        return scipy.fft.irfft(spectrum, 2 * b)[b:]
+
+    def _rebuild_fdl(self) -> None:
+        """Spectra of the last partitions' two-block windows, from the input history."""
+        b = self.partition
+        n_parts = self._part_spectra.shape[0]
+        h = self._history
+        windows = [h[h.size - (p + 2) * b: h.size - p * b] for p in range(n_parts - 1)]
+        windows = [np.zeros(2 * b), *windows]  # slot 0 is overwritten by the coming block
+        self._fdl = scipy.fft.rfft(np.stack(windows), axis=1)
+        self._head = 1 % n_parts

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from synth.modal_kernel import CONTACT_NONE, CONTACT_SLIP
 
@@ -41,6 +42,28 @@ class ContactDiagnostics:
     onset_times: np.ndarray = field(repr=False)
 
 
+@njit(cache=True)
+def _summarise(contact, slip_velocity, was_slipping, onsets):  # pragma: no cover - numba
+    """Count slip onsets (written to ``onsets``), slipping and contact samples, slip sum."""
+    n_onsets = 0
+    n_slip = 0
+    n_contact = 0
+    slip_sum = 0.0
+    previous = was_slipping
+    for i in range(contact.size):
+        slipping = contact[i] == 2
+        if slipping:
+            n_slip += 1
+            slip_sum += slip_velocity[i]
+            if not previous:
+                onsets[n_onsets] = i
+                n_onsets += 1
+        if contact[i] != 0:
+            n_contact += 1
+        previous = slipping
+    return n_onsets, n_slip, n_contact, slip_sum
+
+
 class OnsetTracker:
     """Turns per-sample contact states into :class:`ContactDiagnostics`, block after block."""
 
@@ -57,24 +80,26 @@ class OnsetTracker:
     def update(self, contact: np.ndarray, slip_velocity: np.ndarray,
                start_sample: int) -> ContactDiagnostics:
         """Summarise a block that starts at internal sample ``start_sample``."""
-        slipping = contact == CONTACT_SLIP
-        previous = np.concatenate([[self._last_state == CONTACT_SLIP], slipping[:-1]])
-        onsets = np.flatnonzero(slipping & ~previous)
-        times = (start_sample + onsets) / self.internal_rate
-        known = np.concatenate([[self._last_onset], times]) if np.isfinite(self._last_onset) \
-            else times
-        period = float(np.median(np.diff(known))) if known.size >= 2 else float("nan")
+        onsets = np.empty(contact.size, np.int64)
+        n_onsets, n_slip, n_contact, slip_sum = _summarise(
+            contact, slip_velocity, self._last_state == CONTACT_SLIP, onsets)
+        times = (start_sample + onsets[:n_onsets]) / self.internal_rate
+        if n_onsets >= 2 or (n_onsets == 1 and np.isfinite(self._last_onset)):
+            known = np.concatenate([[self._last_onset], times]) if np.isfinite(
+                self._last_onset) else times
+            period = float(np.median(np.diff(known)))
+        else:
+            period = float("nan")
         if contact.size:
             self._last_state = int(contact[-1])
-        if times.size:
+        if n_onsets:
             self._last_onset = float(times[-1])
         n = max(contact.size, 1)
-        n_slip = int(np.count_nonzero(slipping))
         return ContactDiagnostics(
-            slip_onsets=int(onsets.size),
+            slip_onsets=int(n_onsets),
             slipping_share=n_slip / n,
-            contact_share=float(np.count_nonzero(contact != CONTACT_NONE)) / n,
-            mean_slip_speed=float(slip_velocity[slipping].mean()) if n_slip else 0.0,
+            contact_share=n_contact / n,
+            mean_slip_speed=slip_sum / n_slip if n_slip else 0.0,
             sounding_period=period,
             onset_times=times,
         )

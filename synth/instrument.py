@@ -81,6 +81,8 @@ class StringInput:
     pluck_pulls : sequence of float, m
         How far each pluck pulls the string before letting go (default
         :data:`PLUCK_DISPLACEMENT`).
+    steady_contact : bool
+        beta and finger_ratio are the same over the whole run (one kernel call).
     """
 
     bow_velocity: np.ndarray
@@ -90,6 +92,7 @@ class StringInput:
     finger_ratio: np.ndarray
     pluck_offsets: tuple[int, ...] = ()
     pluck_pulls: tuple[float, ...] = ()
+    steady_contact: bool = False
 
 
 @dataclass
@@ -193,6 +196,7 @@ class Instrument:
         self._sample = 0
         self._grip_until = [0] * self.n_strings
         self._held = [BowControl(0.0, 0.0, 0.1, 0.0) for _ in self.voices]
+        self._ramps: dict[int, np.ndarray] = {}
 
     def _body(self, body: BodySpec, seed: int) -> np.ndarray | None:
         if body is None:
@@ -241,15 +245,27 @@ class Instrument:
             old = self._held[s]
             target = new or BowControl(0.0, 0.0, old.beta, old.finger_ratio)
             _check_control(target, s)
-            velocity = np.linspace(old.bow_velocity, target.bow_velocity, n_internal + 1)[1:]
-            force = np.linspace(old.bow_force, target.bow_force, n_internal + 1)[1:]
-            mode = np.full(n_internal, MODE_BOW if new is not None else MODE_LIFTED, np.int8)
-            mode[force <= 0.0] = MODE_LIFTED
+            ramp = self._ramp(n_internal)
+            velocity = old.bow_velocity + (target.bow_velocity - old.bow_velocity) * ramp
+            force = old.bow_force + (target.bow_force - old.bow_force) * ramp
+            if new is None or max(old.bow_force, target.bow_force) <= 0.0:
+                mode = np.zeros(n_internal, np.int8)
+            elif min(old.bow_force, target.bow_force) > 0.0:
+                mode = np.ones(n_internal, np.int8)
+            else:
+                mode = np.where(force > 0.0, MODE_BOW, MODE_LIFTED).astype(np.int8)
             inputs[s] = StringInput(velocity, force, mode, np.full(n_sub, target.beta),
                                     np.full(n_sub, target.finger_ratio),
-                                    (0,) if s in plucked else ())
+                                    (0,) if s in plucked else (), steady_contact=True)
             self._held[s] = target
         return self._run(n_samples, inputs)
+
+    def _ramp(self, n: int) -> np.ndarray:
+        """(1..n) / n: the linear ramp of a block's controls (cached per size)."""
+        ramp = self._ramps.get(n)
+        if ramp is None:
+            ramp = self._ramps[n] = np.arange(1, n + 1) / n
+        return ramp
 
     def _check_string(self, s: int) -> None:
         if not 0 <= s < self.n_strings:
@@ -306,7 +322,8 @@ class Instrument:
         n_sub = -(-n_samples // SUB_BLOCK)
         zeros = np.zeros(n_internal)
         return StringInput(zeros, zeros, np.zeros(n_internal, np.int8),
-                           np.full(n_sub, held.beta), np.full(n_sub, held.finger_ratio))
+                           np.full(n_sub, held.beta), np.full(n_sub, held.finger_ratio),
+                           steady_contact=True)
 
     def _apply_plucks(self, s: int, given: StringInput, start: int) -> None:
         """Turn pluck starts and a pluck still pulling into grip samples."""
@@ -330,6 +347,11 @@ class Instrument:
 
     def _advance_runs(self, voice: StringVoice, given: StringInput, out: StringOutput) -> None:
         """Call the kernel once per run of sub-blocks sharing beta and finger."""
+        if given.steady_contact or (np.all(given.beta == given.beta[0]) and np.all(
+                given.finger_ratio == given.finger_ratio[0])):
+            voice.advance(given.bow_velocity, given.bow_force, given.contact_mode,
+                          float(given.beta[0]), float(given.finger_ratio[0]), out)
+            return
         per_sub = SUB_BLOCK * self.oversample
         keys = np.stack([np.round(given.beta / 1e-4), np.round(given.finger_ratio / 1e-5)])
         change = np.flatnonzero(np.any(keys[:, 1:] != keys[:, :-1], axis=0)) + 1

@@ -57,3 +57,17 @@ def test_user_wav_is_loaded_resampled_and_bad_files_rejected(tmp_path):
     bad.write_bytes(b"RIFF....")
     with pytest.raises(ParameterError, match="bad.wav"):
         load_body_ir(bad, 44100)
+
+
+def test_mixed_block_sizes_equal_full_convolution():
+    rng = np.random.default_rng(1)
+    ir = rng.normal(size=3528)
+    x = rng.normal(size=20000)
+    conv = BlockConvolver(ir, partition=256)
+    sizes = [256, 256, 1000, 256, 4096, 256, 256, 300, 256]
+    out, i = [], 0
+    while i < x.size:
+        n = sizes[len(out) % len(sizes)]
+        out.append(conv.process(x[i:i + n]))
+        i += n
+    np.testing.assert_allclose(np.concatenate(out), np.convolve(x, ir)[: x.size], atol=1e-9)

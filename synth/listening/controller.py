@@ -48,6 +48,7 @@ class ControllerSettings:
     min_speed_share: float = 0.5
     jitter: float = 0.01
     range_margin: float = 2.0
+    grace_hops: int = 0
 
 
 class ForceController:
@@ -71,6 +72,7 @@ class ForceController:
         self.force = 0.0
         self._recent: deque[int] = deque(maxlen=self.settings.average)
         self._last_speed = 0.0
+        self._hops = 0
         self.set_model(model, K=K)
 
     def set_model(self, model: PairModel, *, K: float | None = None) -> None:
@@ -87,6 +89,7 @@ class ForceController:
         """Begin a note: initial force of the pair at this finger (or ``force``), N."""
         self.force = float(self.model.initial_force(semitones) if force is None else force)
         self._recent.clear()
+        self._hops = 0
 
     def rescale(self, factor: float) -> None:
         """Scale the force (a finger change inside a slur)."""
@@ -111,17 +114,20 @@ class ForceController:
         """
         s = self.settings
         c = 0
+        self._hops += 1
+        settled = self._hops > s.grace_hops
         if features is not None:
             c = self.predict(features)
-            self._recent.append(c)
+            if settled:
+                self._recent.append(c)
         decelerating = speed < self._last_speed - 1e-9
         self._last_speed = speed
-        if c and speed > s.min_speed_share * target_speed and not decelerating:
-            c_avg = float(np.mean(self._recent))
+        if c and settled and speed > s.min_speed_share * target_speed and not decelerating:
+            c_avg = sum(self._recent) / len(self._recent)
             self.force *= self.K ** (3.0 - c_avg)
         if s.jitter:
             self.force *= 1.0 + s.jitter * float(self.rng.standard_normal())
-        self.force = float(np.clip(self.force, *self.bounds))
+        self.force = min(max(self.force, self.bounds[0]), self.bounds[1])
         return c
 
 
