@@ -42,6 +42,9 @@ class ContactDiagnostics:
     onset_times: np.ndarray = field(repr=False)
 
 
+_NO_ONSETS = np.zeros(0)
+
+
 @njit(cache=True)
 def _summarise(contact, slip_velocity, was_slipping, onsets):  # pragma: no cover - numba
     """Count slip onsets (written to ``onsets``), slipping and contact samples, slip sum."""
@@ -80,6 +83,9 @@ class OnsetTracker:
     def update(self, contact: np.ndarray, slip_velocity: np.ndarray,
                start_sample: int) -> ContactDiagnostics:
         """Summarise a block that starts at internal sample ``start_sample``."""
+        if not contact.any():  # bow off the string: nothing to count
+            self._last_state = CONTACT_NONE
+            return ContactDiagnostics(0, 0.0, 0.0, 0.0, float("nan"), _NO_ONSETS)
         onsets = np.empty(contact.size, np.int64)
         n_onsets, n_slip, n_contact, slip_sum = _summarise(
             contact, slip_velocity, self._last_state == CONTACT_SLIP, onsets)

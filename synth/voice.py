@@ -14,6 +14,9 @@ from synth.strings import StringConstants
 BETA_RESOLUTION = 1e-4
 FINGER_RESOLUTION = 1e-5
 _CACHE_SIZE = 256
+#: A released string whose modal displacements all fall below this (m) has rung out
+#: (about 160 dB below playing level) and is no longer simulated.
+SILENT_AMPLITUDE = 1e-12
 
 
 @dataclass
@@ -111,3 +114,5 @@ class StringVoice:
         advance_string(self.state, self.last_forces, packed, gains, self.finger_spring,
                        self.friction, fingered, bow_velocity, bow_force, contact_mode, noise,
                        out.bridge_force, out.slip_velocity, out.contact)
+        if not contact_mode[-1] and np.abs(self.state[0]).max() < SILENT_AMPLITUDE:
+            self.reset()  # rung out: stop simulating until touched again
