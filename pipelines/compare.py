@@ -1,33 +1,19 @@
 """The comparison job: render every score with every method and measure each with the yardstick.
 
-Methods (:data:`METHODS`): ``rules`` (performance rules, open loop), ``feedback`` (rules'
-bowing, the listening controller owns the force), ``sampling`` (gestures sampled from the
-database, the controller corrects the sampled force) and ``sampling-open`` (sampled
-gestures, open loop). Every render records the instrument's contact diagnostics, and
-:func:`pipelines.evaluate.evaluate` judges each part; a score's figures are the yardstick's
-``piece`` figures over the notes of all its rendered parts.
+Methods: :data:`pipelines.methods.METHODS`. Every render records the instrument's contact
+diagnostics, and :func:`pipelines.evaluate.evaluate` judges each part; a score's figures
+are the yardstick's ``piece`` figures over the notes of all its rendered parts.
 """
 
 from __future__ import annotations
 
 import os
-import time
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import pandas as pd
-
 from data_schemas.errors import ArcoError, ParameterError
+from pipelines.methods import METHODS, MethodOutput, PartOutput, check_methods, render_method
 
-#: Methods and what they are.
-METHODS = {
-    "rules": "performance rules (notation -> bowing), open loop",
-    "feedback": "rules' bowing, force chosen by the listening controller",
-    "sampling": "gestures sampled from the database, force corrected by the controller",
-    "sampling-open": "gestures sampled from the database, open loop",
-}
 #: Figures compared between methods and whether larger is better (None: closer to 0).
 FIGURES = {
     "reached_helmholtz_share": True,
@@ -39,95 +25,6 @@ FIGURES = {
     "level_error_db_median": None,
     "render_seconds": False,
 }
-
-
-@dataclass
-class PartOutput:
-    """One rendered part of one method."""
-
-    part_index: int
-    part_name: str
-    instrument: str
-    audio: np.ndarray
-    actions: pd.DataFrame
-    events: pd.DataFrame
-    diagnostics: pd.DataFrame | None
-    notes: pd.DataFrame
-
-
-@dataclass
-class MethodOutput:
-    """All parts of one score rendered by one method."""
-
-    method: str
-    stem: str
-    audio: np.ndarray
-    parts: list[PartOutput] = field(default_factory=list)
-    render_seconds: float = 0.0
-
-
-def check_methods(methods: list[str], *, db, models) -> None:
-    """Raise :class:`ParameterError` for unknown methods or missing --db / --models."""
-    bad = [m for m in methods if m not in METHODS]
-    if bad or not methods:
-        raise ParameterError(f"--methods {','.join(methods)}: unknown {bad or 'none given'} "
-                             f"(choose from {', '.join(METHODS)})")
-    if db is None and any(m.startswith("sampling") for m in methods):
-        raise ParameterError("methods sampling and sampling-open need --db DB (a gesture "
-                             "database from arco build-db)")
-    if models is None and any(m in ("feedback", "sampling") for m in methods):
-        raise ParameterError("methods feedback and sampling need --models DIR (listening "
-                             "models from arco train)")
-    if models is not None and not Path(models).is_dir():
-        raise ParameterError(f"--models {models}: no such directory")
-
-
-def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: str,
-                  config: dict[str, Any], database=None, models=None, seed: int = 0,
-                  sample_rate: int = 44100) -> MethodOutput:
-    """Render the chosen parts of one score with one method (with contact diagnostics)."""
-    from pipelines.render import mix
-
-    start = time.perf_counter()
-    out: list[PartOutput] = []
-    if method == "rules":
-        from pipelines.render import render
-        from synth import render_with_diagnostics
-
-        res = render(notes, config, parts=parts, seed=seed, sample_rate=sample_rate,
-                     audio=False, progress=False)
-        for p in res.parts:
-            y, diag = render_with_diagnostics(p.performance.actions, instrument=p.instrument,
-                                              sample_rate=sample_rate, seed=seed)
-            out.append(PartOutput(p.part_index, p.part_name, p.instrument, y,
-                                  p.performance.actions, p.performance.events, diag,
-                                  notes[notes["part_index"] == p.part_index]))
-    elif method == "feedback":
-        from pipelines.feedback import render_feedback
-        from pipelines.rules import fermata_warp
-
-        warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
-        for index in parts:
-            part = notes[notes["part_index"] == index]
-            name = str(part["instrument"].iloc[0])
-            y, actions, diag, perf = render_feedback(part, config, models_dir=models,
-                                                     instrument=name, seed=seed,
-                                                     sample_rate=sample_rate, warp=warp)
-            out.append(PartOutput(index, str(part["part_name"].iloc[0]), name, y, actions,
-                                  perf.events, diag, part))
-    else:
-        from pipelines.sampling import render_sampling
-
-        res = render_sampling(notes, db=database, models=models,
-                              feedback=method == "sampling", parts=parts, config=config,
-                              seed=seed, sample_rate=sample_rate, diagnostics=True,
-                              progress=False)
-        for p in res.parts:
-            out.append(PartOutput(p.part_index, p.part_name, p.instrument, p.audio,
-                                  p.performance.actions, p.performance.events, p.diagnostics,
-                                  notes[notes["part_index"] == p.part_index]))
-    seconds = time.perf_counter() - start
-    return MethodOutput(method, stem, mix([p.audio for p in out]), out, seconds)
 
 
 def evaluate_output(output: MethodOutput, *, sample_rate: int,
@@ -151,7 +48,7 @@ def evaluate_output(output: MethodOutput, *, sample_rate: int,
     audio_seconds = output.audio.size / sample_rate
     return {**_piece(notes), "render_seconds": round(output.render_seconds, 3),
             "audio_seconds": round(audio_seconds, 3),
-            "real_time_factor": round(output.render_seconds / max(audio_seconds, 1e-9), 3),
+            "real_time_factor": round(audio_seconds / max(output.render_seconds, 1e-9), 3),
             "parts": per_part}
 
 

@@ -1,15 +1,26 @@
-"""``arco render SCORE --method rules ... -o out.wav``: play a score."""
+"""``arco render SCORE [--method rules|feedback|sampling] ... -o out.wav``: play a score."""
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
 
-#: Rendering methods and what they are; only ``rules`` exists so far.
-METHODS = {"rules": "Vivi's performance rules (notation -> bowing, no learning)"}
+#: Methods of ``arco render`` (``sampling`` plays open loop without models or with
+#: ``--no-feedback``).
+RENDER_METHODS = {
+    "rules": "Vivi's performance rules (notation -> bowing, no learning)",
+    "feedback": "the rules' bowing with the force chosen by the listening controller "
+                "(--models)",
+    "sampling": "gestures sampled from a database (--db), force corrected by the listening "
+                "controller when --models is given",
+}
+#: Where ``arco render`` looks for a database and models when none are named.
+DEFAULT_DB = "db"
+DEFAULT_MODELS = "models"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -17,10 +28,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "render", help="render a score to audio (and actions, plot)",
         description="Play SCORE (MusicXML, MXL or MIDI) and write a WAV file, the actions "
-                    "table and a plot of the bowing.")
+                    "table and a plot of the bowing. The method defaults to sampling when a "
+                    "gesture database and listening models exist (--db/--models, or ./db and "
+                    "./models), otherwise to rules.")
     p.add_argument("score", metavar="SCORE", help=".musicxml, .xml, .mxl or .mid file")
-    p.add_argument("--method", required=True, metavar="METHOD",
-                   help=f"how to play: {', '.join(METHODS)}")
+    p.add_argument("--method", metavar="METHOD", default=None,
+                   help=f"how to play: {', '.join(RENDER_METHODS)}")
+    p.add_argument("--db", metavar="DB", help="gesture database (arco build-db) for sampling")
+    p.add_argument("--models", metavar="DIR",
+                   help="listening models (arco train) for feedback and sampling")
+    p.add_argument("--no-feedback", action="store_true",
+                   help="sampling: play the sampled gestures open loop")
     which = p.add_argument_group("parts")
     which.add_argument("--part", metavar="NAME|INDEX",
                        help="part to play, by name or index from 0 in score order "
@@ -42,8 +60,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     out = p.add_argument_group("output")
     out.add_argument("-o", "--output", metavar="OUT.wav", help="audio file to write")
     out.add_argument("--actions", metavar="OUT.parquet",
-                     help="write the actions table (with --all-parts: one file per part, "
+                     help="write the actions played (with --all-parts: one file per part, "
                           "named OUT-<index>-<instrument>.parquet)")
+    out.add_argument("--diagnostics", metavar="OUT.parquet",
+                     help="write the instrument's per-hop contact diagnostics (first part)")
     out.add_argument("--plot", metavar="OUT.png", help="plot the bowing (the first part)")
     out.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000),
                      help="audio sample rate in Hz (default 44100)")
@@ -51,61 +71,100 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _check(args: argparse.Namespace) -> None:
-    if args.method not in METHODS:
-        raise ParameterError(f"--method {args.method!r} is not available (choose from: "
-                             f"{', '.join(METHODS)})")
+def choose_method(args: argparse.Namespace) -> str:
+    """The method asked for, or sampling when a database and models exist, else rules."""
+    if args.method is not None:
+        if args.method not in RENDER_METHODS:
+            raise ParameterError(f"--method {args.method!r} is not available (choose from: "
+                                 f"{', '.join(RENDER_METHODS)})")
+        return args.method
+    db = args.db or (DEFAULT_DB if os.path.isdir(DEFAULT_DB) else None)
+    models = args.models or (DEFAULT_MODELS if os.path.isdir(DEFAULT_MODELS) else None)
+    if db and models:
+        args.db, args.models = db, models
+        return "sampling"
+    return "rules"
+
+
+def _check(args: argparse.Namespace, method: str) -> None:
     if args.skill not in (0, 1, 2, 3):
         raise ParameterError(f"--skill {args.skill} must be 0, 1, 2 or 3")
     if args.instrument and args.all_parts:
         raise ParameterError("--instrument applies to a single part (drop --all-parts)")
-    if not (args.output or args.actions or args.plot):
-        raise ParameterError("nothing to write: give -o OUT.wav, --actions or --plot")
+    if not (args.output or args.actions or args.plot or args.diagnostics):
+        raise ParameterError("nothing to write: give -o OUT.wav, --actions, --diagnostics "
+                             "or --plot")
     if args.output and Path(args.output).suffix.lower() not in (".wav", ".flac"):
         raise ParameterError(f"-o {args.output}: use a .wav (or .flac) file")
+    if method == "feedback" and not args.models:
+        raise ParameterError("--method feedback needs --models DIR (listening models from "
+                             "arco train)")
+    if method == "sampling" and not args.db:
+        raise ParameterError("--method sampling needs --db DB (a gesture database from "
+                             "arco build-db)")
+    if args.models and not Path(args.models).is_dir():
+        raise ParameterError(f"--models {args.models}: no such directory")
 
 
 def run(args: argparse.Namespace) -> int:
     """Read, play, write."""
-    from data_schemas.actions import write_actions
-    from pipelines.plots import plot_bowing
-    from pipelines.render import choose_parts, render, select_measures
+    from pipelines.methods import render_method
+    from pipelines.render import choose_parts, select_measures
     from pipelines.rules_config import load_config
     from pipelines.score import read_score
 
-    _check(args)
-    config = load_config(args.config)
-    notes = read_score(args.score)
-    notes = select_measures(notes, args.start_measure, args.end_measure)
-    parts = choose_parts(notes, args.part, args.all_parts)
-    result = render(notes, config, parts=parts, instrument=args.instrument, skill=args.skill,
-                    seed=args.seed, sample_rate=args.sample_rate,
-                    transpose_octaves=args.transpose_octaves, audio=bool(args.output),
-                    progress=False if args.quiet else None)
+    method = choose_method(args)
+    _check(args, method)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
-    for part in result.parts:
-        for warning in part.performance.warnings:
-            say(f"arco render: warning: {warning}")
-    if args.output:
-        from pipelines.audio_io import write_audio
+    config = load_config(args.config)
+    notes = select_measures(read_score(args.score), args.start_measure, args.end_measure)
+    parts = choose_parts(notes, args.part, args.all_parts)
+    database = None
+    if method == "sampling":
+        from pipelines.sampling import open_database
 
-        path = write_audio(args.output, result.audio, args.sample_rate)
-        say(f"wrote {path} ({result.audio.size / args.sample_rate:.1f} s, "
-            f"{len(result.parts)} part(s))")
+        database = open_database(args.db)
+    models = None if (method == "sampling" and args.no_feedback) else args.models
+    variant = "sampling-open" if method == "sampling" and models is None else method
+    output = render_method(variant, notes, parts, stem=Path(args.score).stem, config=config,
+                           database=database, models=models, seed=args.seed,
+                           sample_rate=args.sample_rate, instrument=args.instrument,
+                           skill=args.skill, transpose_octaves=args.transpose_octaves,
+                           diagnostics=bool(args.diagnostics),
+                           progress=False if args.quiet else None)
+    for part in output.parts:
+        for warning in part.warnings:
+            say(f"arco render: warning: {warning}")
+    _write(args, output, variant, say)
+    return 0
+
+
+def _write(args: argparse.Namespace, output, variant: str, say) -> None:
+    from data_schemas.actions import write_actions
+    from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
+    from data_schemas.io import write_table
+    from pipelines.audio_io import write_audio
+    from pipelines.instruments import get_instrument
+    from pipelines.plots import plot_bowing
+
+    if args.output:
+        path = write_audio(args.output, output.audio, args.sample_rate)
+        say(f"wrote {path} ({output.audio.size / args.sample_rate:.1f} s, "
+            f"{len(output.parts)} part(s), {variant})")
     if args.actions:
         base = Path(args.actions)
-        for part in result.parts:
-            path = base if len(result.parts) == 1 else base.with_name(
+        for part in output.parts:
+            path = base if len(output.parts) == 1 else base.with_name(
                 f"{base.stem}-{part.part_index}-{part.instrument}{base.suffix}")
-            write_actions(part.performance.actions, path)
-            say(f"wrote {path} ({len(part.performance.actions)} frames)")
+            write_actions(part.actions, path)
+            say(f"wrote {path} ({len(part.actions)} frames)")
+    first = output.parts[0]
+    if args.diagnostics and first.diagnostics is not None:
+        write_table(first.diagnostics, args.diagnostics, CONTACT_DIAGNOSTICS)
+        say(f"wrote {args.diagnostics}")
     if args.plot:
-        first = result.parts[0]
-        from pipelines.instruments import get_instrument
-
         names = get_instrument(first.instrument).string_names
-        plot_bowing(first.performance.actions, first.performance.events, args.plot,
+        plot_bowing(first.actions, first.events, args.plot,
                     title=f"{Path(args.score).name}: {first.part_name} ({first.instrument}), "
-                          f"rules, skill {args.skill}", string_names=names)
+                          f"{variant}, skill {args.skill}", string_names=names)
         say(f"wrote {args.plot}")
-    return 0
