@@ -371,6 +371,38 @@ def _fractional(x: float) -> bool:
     return abs(x - round(x)) > 1e-6
 
 
+def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
+                   instrument: str | None = None, skill: int = 3,
+                   rng: np.random.Generator | None = None,
+                   warp: Callable[[np.ndarray], np.ndarray] | None = None,
+                   transpose_octaves: bool = False,
+                   ) -> tuple[str, pd.DataFrame, pd.DataFrame, list]:
+    """The front end every method shares: order, fold into range, choose strings, time.
+
+    Parameters are those of :func:`perform_part`.
+
+    Returns
+    -------
+    instrument : str
+    notes : pandas.DataFrame
+        The part's notes in playing order, folded into range.
+    strings : pandas.DataFrame
+        String and finger per note (:func:`pipelines.instruments.choose_strings`).
+    events : list of Event
+        Played events (:func:`build_events`).
+    """
+    name = instrument or str(notes["instrument"].iloc[0])
+    inst = get_instrument(name)
+    notes = notes.sort_values(["onset_beats", "grace", "midi_pitch"],
+                              ascending=[True, False, True], kind="stable")
+    notes = fit_range(notes.reset_index(drop=True), inst, transpose_octaves=transpose_octaves)
+    strings = choose_strings(notes, inst)
+    if warp is None:
+        warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    events = build_events(notes, strings, config, warp=warp, skill=skill, rng=rng)
+    return name, notes, strings, events
+
+
 def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str | None = None,
                  skill: int = 3, rng: np.random.Generator | None = None,
                  warp: Callable[[np.ndarray], np.ndarray] | None = None,
@@ -405,15 +437,9 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         from data_schemas.errors import ParameterError
 
         raise ParameterError(f"skill={skill!r} must be 0, 1, 2 or 3")
-    name = instrument or str(notes["instrument"].iloc[0])
-    inst = get_instrument(name)
-    notes = notes.sort_values(["onset_beats", "grace", "midi_pitch"],
-                              ascending=[True, False, True], kind="stable")
-    notes = fit_range(notes.reset_index(drop=True), inst, transpose_octaves=transpose_octaves)
-    strings = choose_strings(notes, inst)
-    if warp is None:
-        warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
-    events = build_events(notes, strings, config, warp=warp, skill=skill, rng=rng)
+    name, notes, strings, events = prepare_events(
+        notes, config, instrument=instrument, skill=skill, rng=rng, warp=warp,
+        transpose_octaves=transpose_octaves)
     inst_cfg = config["instruments"][name]
     warnings: list[str] = []
     if strings["rolled"].any():

@@ -27,7 +27,7 @@ import pandas as pd
 from data_schemas.errors import ParameterError
 from data_schemas.sampling import validate_targets
 from pipelines.render import PartRender, RenderResult, choose_parts, mix
-from pipelines.rules import Event, Performance, build_events, fermata_warp
+from pipelines.rules import Event, Performance, fermata_warp
 
 #: Violin open-string length (m): effective string lengths are violin-equivalent.
 VIOLIN_STRING_LENGTH = 0.325
@@ -232,17 +232,11 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     """
     from gesture_db.render import render_samples
     from gesture_db.search import search
-    from pipelines.instruments import choose_strings, fit_range, get_instrument
+    from pipelines.rules import prepare_events
 
-    name = instrument or str(notes["instrument"].iloc[0])
-    inst = get_instrument(name)
-    notes = notes.sort_values(["onset_beats", "grace", "midi_pitch"],
-                              ascending=[True, False, True], kind="stable")
-    notes = fit_range(notes.reset_index(drop=True), inst, transpose_octaves=transpose_octaves)
-    strings = choose_strings(notes, inst)
-    if warp is None:
-        warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
-    events = build_events(notes, strings, config, warp=warp, skill=3, rng=rng)
+    _name, notes, _strings, events = prepare_events(
+        notes, config, instrument=instrument, rng=rng, warp=warp,
+        transpose_octaves=transpose_octaves)
     targets, _bowed = targets_from_events(events, notes)
     result = search(targets, database.index, predictors=database.predictors,
                     config=database.search_config)
