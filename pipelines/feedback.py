@@ -22,7 +22,7 @@ from data_schemas.errors import ParameterError
 from pipelines.instruments import get_instrument
 from pipelines.rules import Performance, fermata_warp, perform_part
 from pipelines.rules_config import dynamic_table
-from synth.listening.controller import HopPlan, PerformanceLog
+from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog
 from synth.listening.features import HOP
 
 #: Dynamic level (0..9, p = 3 .. f = 6) of each trained lane.
@@ -126,6 +126,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
                     skill: int = 3, seed: int = 0, sample_rate: int = 44100,
                     transpose_octaves: bool = False, warp=None,
                     rng: np.random.Generator | None = None,
+                    settings: ControllerSettings | None = None,
                     ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame, Performance]:
     """Play one part with the rules' bowing and the listening controller's force.
 
@@ -151,6 +152,8 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
         Shared fermata time map (see :func:`pipelines.rules.fermata_warp`).
     rng : numpy.random.Generator, optional
         Source of the rules' skill jitter (as in :func:`pipelines.render.render`).
+    settings : ControllerSettings, optional
+        Tuning of the control law (default :class:`ControllerSettings`).
 
     Returns
     -------
@@ -179,7 +182,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     models = load_models(models_dir, name)
     inst = Instrument(name, sample_rate=sample_rate, seed=seed)
     log = perform(plan, models, inst, rng=np.random.default_rng([seed, 1]),
-                  record_diagnostics=True)
+                  settings=settings, record_diagnostics=True)
     tail = inst.process(int(TAIL * sample_rate), {}).audio
     audio = np.concatenate([log.audio, tail]).astype(np.float32)
     actions = played_actions(perf, plan, span, log, sample_rate=sample_rate)

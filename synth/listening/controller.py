@@ -34,7 +34,8 @@ class ControllerSettings:
     Attributes
     ----------
     average : int
-        Hops of classes averaged (Vivi's later code: 4).
+        Hops of classes averaged (Vivi's later code: 4; 8 here, measured on the scale of
+        ``bench/feedback_speed.py``: fewer let single misjudged hops move the force).
     min_speed_share : float
         The law applies only while |v| > this x target velocity.
     jitter : float
@@ -42,13 +43,17 @@ class ControllerSettings:
     range_margin : float
         The force stays within the forces judged acceptable in training (the controller's
         own experience) widened by this factor each way; 0 = only ``0 <= F <= 50 N``.
+    grace_hops : int
+        Hops after a stroke starts during which the controller listens but neither averages
+        nor applies the law (~87 ms at 15: the bow's ramp to 0.33 m/s at 5 m/s^2 plus one
+        analysis window), so the attack transient does not pull the force away.
     """
 
-    average: int = 4
+    average: int = 8
     min_speed_share: float = 0.5
     jitter: float = 0.01
     range_margin: float = 2.0
-    grace_hops: int = 0
+    grace_hops: int = 15
 
 
 class ForceController:

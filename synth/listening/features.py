@@ -22,6 +22,8 @@ tests check the two against each other and against librosa's batch features).
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
+from scipy.fft import next_fast_len
 
 WINDOW = 1024
 HOP = 256
@@ -223,6 +225,10 @@ def batch_features(y: np.ndarray, expected_f0: np.ndarray | float, *, sample_rat
 class StreamingFeatures:
     """Causal per-hop features for the control loop (same numbers as :func:`batch_features`).
 
+    One hop costs two real FFTs of the frame (spectrum, YIN autocorrelation) and two numba
+    kernels (:func:`_spectral_kernel`, :func:`_yin_kernel`); the window, frequencies and
+    buffers are allocated once.
+
     Parameters
     ----------
     sample_rate : int, Hz
@@ -235,13 +241,19 @@ class StreamingFeatures:
         self.yin_window = int(max(yin_window, WINDOW))
         self._buffer = np.zeros(self.yin_window)
         self._filled = 0
-        self._previous: np.ndarray | None = None
+        self._hann = hann(WINDOW)
+        self._freqs = np.fft.rfftfreq(WINDOW, 1.0 / self.sample_rate)
+        self._norm = np.zeros(WINDOW // 2 + 1)
+        self._has_previous = False
+        self._max_lag = self.yin_window // 2
+        self._nfft = next_fast_len(self.yin_window + self._max_lag, real=True)
+        self._out = np.zeros(len(FEATURE_NAMES))
 
     def reset(self) -> None:
         """Forget the past (silence before the next hop)."""
         self._buffer[:] = 0.0
         self._filled = 0
-        self._previous = None
+        self._has_previous = False
 
     @property
     def ready(self) -> bool:
@@ -259,15 +271,135 @@ class StreamingFeatures:
         Returns
         -------
         np.ndarray [shape=(len(FEATURE_NAMES),)]
+            A new array (the caller may keep it).
         """
         k = hop_audio.size
         buf = self._buffer
         buf[:-k] = buf[k:]
         buf[-k:] = hop_audio
         self._filled += k
-        frame = buf[-WINDOW:][None, :]
-        yin_frames = buf[None, :] if self.yin_window > WINDOW else None
-        feats, self._previous = frame_features(
-            frame, expected_f0, sample_rate=self.sample_rate,
-            previous_magnitude=self._previous, yin_frames=yin_frames)
-        return feats[0]
+        frame = buf[-WINDOW:]
+        mag = np.abs(np.fft.rfft(frame * self._hann))
+        out = self._out
+        _spectral_kernel(frame, mag, self._freqs, self._norm, self._has_previous, out)
+        self._has_previous = True
+        f0 = float(expected_f0)
+        if np.isfinite(f0) and f0 > 0.0 and buf.any():
+            spec_x = np.fft.rfft(buf, self._nfft)
+            spec_h = np.fft.rfft(buf[: self._max_lag], self._nfft)
+            cross = np.fft.irfft(spec_x * np.conj(spec_h), self._nfft)
+            pitch, aper = _yin_kernel(buf, cross, f0, float(self.sample_rate))
+            diff = 12.0 * np.log2(pitch / f0) if np.isfinite(pitch) and pitch > 0 else 0.0
+            out[7] = min(max(diff, -PITCH_CLIP), PITCH_CLIP)
+            out[8] = aper
+        else:
+            out[7] = 0.0
+            out[8] = 1.0
+        return out.copy()
+
+
+@njit(cache=True)
+def _spectral_kernel(frame, mag, freqs, norm, has_previous, out):  # pragma: no cover - numba
+    """Spectral and time-domain features of one frame (see :func:`frame_features`).
+
+    Writes zcr, centroid, rolloff, flux, crest, flatness, rms_db into ``out[:7]`` and
+    replaces ``norm`` (the previous frame's L2-normalised magnitude) by this frame's.
+    """
+    n = mag.size
+    total = 0.0
+    weighted = 0.0
+    sq = 0.0
+    peak = 0.0
+    log_power = 0.0
+    power_sum = 0.0
+    for i in range(n):
+        m = mag[i]
+        total += m
+        weighted += m * freqs[i]
+        sq += m * m
+        if m > peak:
+            peak = m
+        p = max(m * m, 1e-10)
+        log_power += np.log(p)
+        power_sum += p
+    centroid = weighted / total if total > 0 else 0.0
+    threshold = 0.85 * total
+    cum = 0.0
+    idx = 0
+    for i in range(n):
+        cum += mag[i]
+        if cum >= threshold:
+            idx = i
+            break
+    length = max(np.sqrt(sq), 1e-10)
+    flux = 0.0
+    for i in range(n):
+        v = mag[i] / length
+        if has_previous:
+            flux += (v - norm[i]) ** 2
+        norm[i] = v
+    w = frame.size
+    crossings = 0
+    energy = 0.0
+    prev_neg = False
+    for i in range(w):
+        x = frame[i]
+        energy += x * x
+        neg = x < 0.0 and abs(x) > 1e-10
+        if i and neg != prev_neg:
+            crossings += 1
+        prev_neg = neg
+    out[0] = crossings / w
+    out[1] = centroid
+    out[2] = freqs[idx]
+    out[3] = np.sqrt(flux)
+    out[4] = peak / max(total / n, 1e-10)
+    out[5] = np.exp(log_power / n) / (power_sum / n)
+    out[6] = 20.0 * np.log10(max(np.sqrt(energy / w), 1e-8))
+
+
+@njit(cache=True)
+def _yin_kernel(x, cross, expected_f0, sample_rate):  # pragma: no cover - numba
+    """YIN pitch (Hz) and aperiodicity of one frame from its FFT cross-correlation.
+
+    The same steps as :func:`yin` for one row: difference function, cumulative-mean
+    normalisation, first dip under the threshold within an octave of ``expected_f0`` (else
+    the minimum), its local minimum and a parabolic refinement.
+    """
+    w = x.size
+    max_lag = w // 2
+    energy = np.empty(w + 1)
+    energy[0] = 0.0
+    for i in range(w):
+        energy[i + 1] = energy[i] + x[i] * x[i]
+    e_head = energy[max_lag]
+    cmnd = np.empty(max_lag + 1)
+    cmnd[0] = 1.0
+    cum = 0.0
+    for tau in range(1, max_lag + 1):
+        d = max(e_head + energy[tau + max_lag] - energy[tau] - 2.0 * cross[tau], 0.0)
+        cum += d
+        cmnd[tau] = d * tau / max(cum, 1e-10)
+    lo = int(min(max(np.floor(sample_rate / (2.0 * expected_f0)), 2), max_lag - 2))
+    hi = int(min(max(np.ceil(sample_rate / (0.5 * expected_f0)), 3), max_lag - 1))
+    first = -1
+    arg = lo
+    for lag in range(lo, hi + 1):
+        if cmnd[lag] < _YIN_THRESHOLD:
+            first = lag
+            break
+        if cmnd[lag] < cmnd[arg]:
+            arg = lag
+    if first < 0:
+        first = arg if lo <= hi else 0
+    best = first
+    while best < hi and cmnd[best + 1] < cmnd[best]:
+        best += 1
+    best = min(max(best, 1), max_lag - 1)
+    a = cmnd[best - 1]
+    b = cmnd[best]
+    c = cmnd[min(best + 1, max_lag)]
+    denom = a - 2.0 * b + c
+    shift = 0.5 * (a - c) / denom if abs(denom) > 1e-12 else 0.0
+    period = best + min(max(shift, -1.0), 1.0)
+    return sample_rate / period, min(max(b, 0.0), 1.0)

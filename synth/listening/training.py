@@ -26,7 +26,7 @@ import numpy as np
 from synth.instrument import Instrument
 from synth.listening.classifier import FINGERS, PairModel, fit_pair
 from synth.listening.clips import MAX_ACCELERATION, Clip, ClipSpec, auto_label, render_clip
-from synth.listening.controller import ControllerSettings, HopPlan, perform
+from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog, perform
 from synth.listening.features import HOP, batch_features, yin_window_for
 
 #: Vivi's bow lanes: dynamic -> (bow velocity m/s, beta).
@@ -46,7 +46,7 @@ class TrainingSettings:
     min_force: float = 0.002
     max_force: float = 50.0
     band_clips: int = 2
-    k_candidates: tuple[float, ...] = (1.01, 1.02, 1.035, 1.05, 1.07, 1.1)
+    k_candidates: tuple[float, ...] = (1.005, 1.01, 1.02, 1.035, 1.05, 1.1)
     k_repeats: int = 3
     k_note: float = 0.6
     f_candidates: int = 6
@@ -56,9 +56,9 @@ class TrainingSettings:
     controller: ControllerSettings = field(default_factory=ControllerSettings)
 
 
-QUICK = TrainingSettings(settle=0.6, record=0.3, band_clips=1, k_candidates=(1.02, 1.05, 1.1),
-                         k_repeats=1, k_note=0.5, f_candidates=4, f_rounds=1, f_repeats=1,
-                         f_note=0.4)
+QUICK = TrainingSettings(settle=0.6, record=0.3, band_clips=1,
+                         k_candidates=(1.005, 1.01, 1.02, 1.05), k_repeats=1, k_note=0.6,
+                         f_candidates=5, f_rounds=1, f_repeats=1, f_note=0.6)
 
 
 @dataclass
@@ -223,7 +223,25 @@ def fit_from_clips(clips: list[JudgedClip], *, instrument: str, string: int, dyn
     good = [j.force for j in clips if j.label == 3]
     if good:
         model.metadata["good_range"] = [float(min(good)), float(max(good))]
+    model.metadata["good_by_finger"] = good_bands(clips)
     return model
+
+
+def good_bands(clips: list[JudgedClip]) -> dict[str, list[float]]:
+    """Per finger position, the lowest and highest force judged 3 (N).
+
+    Returns
+    -------
+    dict of str to [float, float]
+        Keyed by the finger in semitones (``"0"``, ``"4"``, ``"7"``); fingers without a
+        class-3 clip are left out.
+    """
+    out: dict[str, list[float]] = {}
+    for semis in sorted({j.clip.spec.semitones for j in clips}):
+        good = [j.force for j in clips if j.clip.spec.semitones == semis and j.label == 3]
+        if good:
+            out[f"{semis:g}"] = [float(min(good)), float(max(good))]
+    return out
 
 
 def note_plan(semitones: float, f0: float, *, velocity: float, beta: float, duration: float,
@@ -246,8 +264,10 @@ def note_plan(semitones: float, f0: float, *, velocity: float, beta: float, dura
     return plan
 
 
-def _note_classes(model: PairModel, semitones: float, *, force: float, K: float,
-                  duration: float, settings: TrainingSettings, seed: int) -> np.ndarray:
+def _play_note(model: PairModel, semitones: float, *, force: float, K: float,
+               duration: float, settings: TrainingSettings, seed: int,
+               record_diagnostics: bool = False) -> tuple[HopPlan, PerformanceLog, float]:
+    """Play one training note under feedback; return the plan, the log and its f0 (Hz)."""
     from synth.strings import load_instrument
 
     inst_c = load_instrument(model.instrument)
@@ -260,9 +280,50 @@ def _note_classes(model: PairModel, semitones: float, *, force: float, K: float,
     inst = Instrument(model.instrument, seed=seed)
     log = perform(plan, {(model.string, model.dynamic): model}, inst,
                   rng=np.random.default_rng(seed), settings=settings.controller, K=K,
-                  initial_force=force)
+                  initial_force=force, record_diagnostics=record_diagnostics)
+    return plan, log, f0
+
+
+def _note_classes(model: PairModel, semitones: float, *, force: float, K: float,
+                  duration: float, settings: TrainingSettings, seed: int) -> np.ndarray:
+    """Classes the controller heard during one training note (classified hops only)."""
+    _, log, _ = _play_note(model, semitones, force=force, K=K, duration=duration,
+                           settings=settings, seed=seed)
     c = log.classes[:, model.string]
     return c[c > 0]
+
+
+def teacher_note_classes(model: PairModel, semitones: float, *, force: float, K: float,
+                         duration: float, settings: TrainingSettings,
+                         seed: int) -> np.ndarray:
+    """The automatic teacher's class of every sustained hop of one training note.
+
+    The teacher listens to the practice note (as the evaluation does: slip onsets and
+    periodicity per hop); hops count once the bow has reached 90 % of its speed.
+
+    Returns
+    -------
+    np.ndarray [shape=(n_sustained,)], int
+    """
+    from synth.listening.clips import reference_rms
+    from synth.listening.teacher import hop_statistics, judge, reference_force
+    from synth.strings import load_instrument
+
+    plan, log, f0 = _play_note(model, semitones, force=force, K=K, duration=duration,
+                               settings=settings, seed=seed, record_diagnostics=True)
+    s = model.string
+    hops = log.diagnostics[s]
+    onsets = np.array([d.slip_onsets for _, d in hops], np.float64)
+    period = np.array([d.sounding_period for _, d in hops], np.float64)
+    audio = np.concatenate([log.audio, np.zeros(4 * HOP, np.float32)]).astype(np.float64)
+    stats = hop_statistics(onsets, period, audio, f0=np.full(onsets.size, f0),
+                           sample_rate=44100, reference_rms=reference_rms(model.instrument))
+    speed = np.abs(plan.velocity[:, s])
+    sustained = np.flatnonzero(speed >= 0.9 * speed.max())
+    string_ref = load_instrument(model.instrument).strings[s].reference_force
+    beta = float(plan.beta[0, s])
+    return np.array([judge(stats[k], force_ratio=log.force[k, s] / reference_force(
+        string_ref, max(speed[k], 1e-3), beta)) for k in sustained], np.int64)
 
 
 def stability_cost(classes: np.ndarray) -> float:
@@ -298,7 +359,14 @@ def _iq_geomean(costs: list[float]) -> float:
 
 def search_k(model: PairModel, *, settings: TrainingSettings | None = None,
              seed: int = 0) -> tuple[float, dict[float, float]]:
-    """Choose K for a pair (lowest inter-quartile geometric mean of the pattern's cost).
+    """Choose K for a pair: the factor under which practice notes sound best to the teacher.
+
+    The training pattern plays each finger position starting at half, once and twice the
+    learned initial force (or, before it is learned, the quarter, centre and top of the
+    class-3 band) under feedback with each candidate K. The teacher judges every sustained
+    hop; a note's cost is eq. 7 on those classes (product over same-sign runs of
+    1 + sum (3 - c)^2); a repeat's cost is the product over its notes; the inter-quartile
+    geometric mean over repeats is kept and the lowest-cost K wins (ties: the smaller K).
 
     Returns
     -------
@@ -307,17 +375,16 @@ def search_k(model: PairModel, *, settings: TrainingSettings | None = None,
         Cost per candidate K.
     """
     settings = settings or TrainingSettings()
-    f_max = float(model.metadata["force_range"][1])
-    starts = (f_max / 16.0, f_max / 4.0, f_max)
     costs = {}
     for K in settings.k_candidates:
         per_repeat = []
         for r in range(settings.k_repeats):
             log_cost = 0.0
             for i, semis in enumerate(settings.fingers):
-                for j, f in enumerate(starts):
-                    c = _note_classes(model, semis, force=f, K=K, duration=settings.k_note,
-                                      settings=settings, seed=seed + 97 * r + 11 * i + j)
+                for j, f in enumerate(_pattern_starts(model, semis)):
+                    c = teacher_note_classes(model, semis, force=f, K=K,
+                                             duration=settings.k_note, settings=settings,
+                                             seed=seed + 97 * r + 11 * i + j)
                     log_cost += np.log(stability_cost(c))
             per_repeat.append(float(np.exp(log_cost)))
         costs[float(K)] = _iq_geomean(per_repeat)
@@ -325,31 +392,58 @@ def search_k(model: PairModel, *, settings: TrainingSettings | None = None,
     return best, costs
 
 
+def _pattern_starts(model: PairModel, semitones: float) -> tuple[float, float, float]:
+    """Starting forces (N) of the K pattern at a finger position."""
+    if model.metadata.get("initial_forces"):
+        f = model.initial_force(semitones)
+    else:
+        lo, hi = _search_band(model, semitones)
+        f = float(np.sqrt(lo * hi))
+    return f / 2.0, f, 2.0 * f
+
+
 def search_initial_force(model: PairModel, semitones: float, *,
                          settings: TrainingSettings | None = None, seed: int = 0) -> float:
-    """Choose the initial force (N) of a pair at one finger position (zooming search)."""
+    """Choose the initial force (N) of a pair at one finger position.
+
+    Practice notes start at forces log-spaced over the finger's class-3 band of the basic
+    training (the whole audible range when it has none); the teacher judges every sustained
+    hop and a note's cost is sum (3 - c)^2 over them (the attack's cost, eq. 8, plus any later
+    error); the median over ``f_repeats`` seeds is kept. The search zooms in around the best
+    force ``f_rounds`` times; ties go to the force nearest the band's geometric centre.
+    """
     settings = settings or TrainingSettings()
-    lo, hi = (float(x) for x in model.metadata["force_range"])
+    lo, hi = _search_band(model, semitones)
+    centre = float(np.sqrt(lo * hi))
     tried: dict[float, float] = {}
     for _ in range(max(settings.f_rounds, 1)):
-        grid = np.geomspace(lo, hi, settings.f_candidates)
-        for f in grid:
+        for f in np.geomspace(lo, hi, settings.f_candidates):
             key = float(f)
             if key in tried:
                 continue
-            costs = [attack_cost(_note_classes(model, semitones, force=key, K=model.K,
-                                               duration=settings.f_note, settings=settings,
-                                               seed=seed + 31 * r))
-                     for r in range(settings.f_repeats)]
-            tried[key] = _iq_geomean([c + 1.0 for c in costs])
+            costs = [float(np.sum((3.0 - teacher_note_classes(
+                model, semitones, force=key, K=model.K, duration=settings.f_note,
+                settings=settings, seed=seed + 31 * r)) ** 2))
+                for r in range(settings.f_repeats)]
+            tried[key] = float(np.median(costs))
         order = sorted(tried)
-        best = min(order, key=lambda f: (tried[f], abs(np.log(f / np.sqrt(lo * hi)))))
+        best = min(order, key=lambda f: (tried[f], abs(np.log(f / centre))))
         k = order.index(best)
-        lo = order[max(k - 1, 0)]
-        hi = order[min(k + 1, len(order) - 1)]
+        lo, hi = order[max(k - 1, 0)], order[min(k + 1, len(order) - 1)]
         if hi / lo < 1.05:
             break
-    return float(min(tried, key=lambda f: tried[f]))
+    return float(min(tried, key=lambda f: (tried[f], abs(np.log(f / centre)))))
+
+
+def _search_band(model: PairModel, semitones: float) -> tuple[float, float]:
+    """Forces (N) the initial-force search covers at a finger position."""
+    band = model.metadata.get("good_by_finger", {}).get(f"{semitones:g}")
+    if band is None:
+        band = model.metadata.get("good_range") or model.metadata["force_range"]
+    lo, hi = (float(x) for x in band)
+    if hi / lo < 1.5:  # a single judged force: search around it
+        lo, hi = lo / 1.4, hi * 1.4
+    return lo, hi
 
 
 def train_pair(instrument: str, string: int, dynamic: str, *,
@@ -371,9 +465,10 @@ def train_pair(instrument: str, string: int, dynamic: str, *,
                                teacher=teacher, seed=seed)
     model = fit_from_clips(clips, instrument=instrument, string=string, dynamic=dynamic,
                            lane=lane, seed=seed)
-    K, costs = search_k(model, settings=settings, seed=seed)
-    model.metadata.update(K=K, k_costs={str(k): v for k, v in costs.items()})
+    model.metadata.update(K=settings.k_candidates[0])
     forces = [search_initial_force(model, semis, settings=settings, seed=seed + 7 * i)
               for i, semis in enumerate(FINGERS)]
     model.metadata.update(initial_forces=forces)
+    K, costs = search_k(model, settings=settings, seed=seed)
+    model.metadata.update(K=K, k_costs={str(k): v for k, v in costs.items()})
     return model, clips
