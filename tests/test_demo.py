@@ -7,7 +7,7 @@ from pipelines.cli import main
 
 
 def test_demo_writes_audio_plots_and_report(tmp_path):
-    assert main(["demo", "-o", str(tmp_path)]) == 0
+    assert main(["demo", "-o", str(tmp_path), "--skip-learning"]) == 0
     for name in ("scales.wav", "mozart-k421-rules.wav"):
         audio, rate = sf.read(tmp_path / name)
         assert rate == 44100 and np.isfinite(audio).all() and np.abs(audio).max() > 0.01

@@ -1,11 +1,16 @@
-"""``arco demo``: play the most complete pipeline on built-in data, writing under ``out/``.
+"""``arco demo``: the whole story on built-in data, written under ``out/``.
 
 1. the instrument alone: a pentachord on every string of violin, viola and cello
    (``scales.wav``, one bowing plot per instrument, pitch errors in the report);
 2. the performance rules: the opening of Mozart's quartet K. 421 (bundled, public domain),
-   every part on its own instrument (``mozart-k421-rules.wav``, actions, bowing plot).
+   every part on its own instrument (``mozart-k421-rules.wav``, actions, bowing plot);
+3. gesture sampling against feedback control: simulate a small set of bowing recordings,
+   build the gesture database, train the listening models (reused when ``out/models``
+   already holds them), and compare rules, feedback, sampling and open-loop sampling on
+   the first violin's opening (``report/index.html``, ``report/results.json``).
 
-``report.md`` says what was played and what was measured.
+``report.md`` says what was played and what was measured. Each step of part 3 is an
+``arco`` command, printed as it runs, so it can be repeated on one's own data.
 """
 
 from __future__ import annotations
@@ -28,6 +33,8 @@ from synth.strings import load_instrument
 SAMPLE_RATE = 44100
 DEMO_SCORE = "mozart-k421.mxl"
 DEMO_MEASURES = (1, 8)
+#: Size of the simulated recording set of the demo (notes, performers).
+DEMO_RECORDINGS = (2000, 3)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -36,6 +43,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                               description=__doc__)
     p.add_argument("-o", "--output", type=Path, default=Path("out"))
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    p.add_argument("--skip-learning", action="store_true",
+                   help="only the instrument and the rules (no database, training, comparison)")
     p.set_defaults(func=run)
 
 
@@ -51,6 +61,8 @@ def run(args: argparse.Namespace) -> int:
     report = ["# Arco demo", ""]
     report += scales(out, args.seed)
     report += quartet_rules(out, args.seed)
+    if not args.skip_learning:
+        report += sampling_story(out, args.seed, args.workers)
     (out / "report.md").write_text("\n".join(report) + "\n")
     print(f"wrote audio, plots and {out / 'report.md'}")
     return 0
@@ -104,6 +116,56 @@ def quartet_rules(out: Path, seed: int) -> list[str]:
             f"{DEMO_MEASURES[1]}, all four parts: `{stem}.wav` ({audio_s:.1f} s, rendered in "
             f"{seconds:.1f} s), actions `{stem}-<part>.parquet`, first violin's bowing "
             f"`{stem}.png`.", ""]
+
+
+def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
+    """Simulate recordings, build the database, train, compare the four methods."""
+    import json
+
+    from pipelines.cli import main
+
+    notes, performers = DEMO_RECORDINGS
+    steps = [
+        ["simulate-recordings", "--notes", str(notes), "--performers", str(performers),
+         "--seed", str(seed + 1), "-o", str(out / "recordings")],
+        ["build-db", str(out / "recordings"), "-o", str(out / "db"), "--workers", str(workers)],
+        ["db", "info", str(out / "db"), "--no-plots"],
+        ["train", "--instrument", "violin", "--teacher", "auto", "--quick",
+         "-o", str(out / "models"), "--workers", str(workers), "--seed", str(seed)],
+        ["compare", str(bundled_score()), "--methods", "rules,feedback,sampling,sampling-open",
+         "--db", str(out / "db"), "--models", str(out / "models"), "--part", "0",
+         "--start-measure", str(DEMO_MEASURES[0]), "--end-measure", str(DEMO_MEASURES[1]),
+         "--seed", str(seed), "-o", str(out / "report")],
+    ]
+    timings = []
+    for step in steps:
+        print("$ arco " + " ".join(step), flush=True)
+        start = time.perf_counter()
+        code = main(step)
+        if code != 0:
+            raise RuntimeError(f"demo step failed: arco {' '.join(step)}")
+        timings.append((step[0] if step[0] != "db" else "db info", time.perf_counter() - start))
+    results = json.loads((out / "report" / "results.json").read_text())
+    lines = ["## Gesture sampling against feedback control", "",
+             f"{notes} simulated notes by {performers} performers -> gesture database -> "
+             "listening models for the 16 violin string x dynamic pairs -> the first violin of "
+             f"K. 421, measures {DEMO_MEASURES[0]}-{DEMO_MEASURES[1]}, played four ways. "
+             "Full report with audio and bowing plots: `report/index.html`.", "",
+             "| method | Helmholtz share | class-3 share | attack median (ms) | "
+             "pitch error (cents) | render (s) |", "|---|---|---|---|---|---|"]
+    stem = bundled_score().stem
+    for method, pieces in results.items():
+        figures = pieces.get(stem, {})
+        if "error" in figures:
+            lines.append(f"| {method} | error: {figures['error']} | | | | |")
+            continue
+        lines.append(
+            f"| {method} | {figures['helmholtz_share']:.3f} | "
+            f"{figures.get('sustained_class3_share', float('nan')):.3f} | "
+            f"{figures['attack_ms_median']:.0f} | {figures['pitch_error_cents_median']:+.1f} | "
+            f"{figures['render_seconds']:.1f} |")
+    lines += ["", "Steps: " + ", ".join(f"{name} {sec:.0f} s" for name, sec in timings), ""]
+    return lines
 
 
 def _pitch_rows(name: str, audio: np.ndarray, events) -> list[str]:
