@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from gesture_db.bezier import fit_note
-from gesture_db.groups import CONTOUR_PARAMS, grammar_for, group_names
+from gesture_db.groups import CONTOUR_PARAMS, chain_positions, grammar_for, group_names
 from gesture_db.segment import detect_events, detect_notes, refine_boundaries, score_segmentation
 from gesture_db.simulate import _DYN_F, _DYN_LEVEL, OPEN_STRINGS, STRING_LENGTH
 
@@ -152,17 +152,9 @@ def _blind_notes(rec: pd.DataFrame, events) -> pd.DataFrame:
     return pd.DataFrame(dict(
         note_index=np.arange(n), onset=ons, offset=offs, technique="unlabelled",
         bow_direction=det["bow_direction"].to_numpy(),
-        slur_position=_position(slur_prev, slur_next),
-        run_position=_position(~starts_run, linked_next & np.r_[~starts_run[1:], False]),
+        slur_position=chain_positions(slur_prev, slur_next),
+        run_position=chain_positions(~starts_run, linked_next & np.r_[~starts_run[1:], False]),
         midi_pitch=pitch, string=string, finger_ratio=fr, dynamic=dynamic))
-
-
-def _position(prev: np.ndarray, nxt: np.ndarray) -> np.ndarray:
-    out = np.full(prev.size, "iso", dtype=object)
-    out[~prev & nxt] = "init"
-    out[prev & nxt] = "mid"
-    out[prev & ~nxt] = "end"
-    return out
 
 
 __all__ = ["extract_take"]

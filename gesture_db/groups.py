@@ -42,6 +42,26 @@ def group_name(technique: str, direction: str, slur_position: str, run_position:
     return f"{technique}-{direction}-{slur_position}-{run_position}"
 
 
+def chain_positions(linked_before: np.ndarray, linked_after: np.ndarray) -> np.ndarray:
+    """Position of each note in a chain (a slur, a run without rests).
+
+    Parameters
+    ----------
+    linked_before, linked_after : np.ndarray [shape=(n,)], bool
+        The note is joined to the previous / next note.
+
+    Returns
+    -------
+    np.ndarray [shape=(n,)], object
+        ``init``, ``mid``, ``end`` or ``iso``.
+    """
+    out = np.full(linked_before.size, "iso", dtype=object)
+    out[~linked_before & linked_after] = "init"
+    out[linked_before & linked_after] = "mid"
+    out[linked_before & ~linked_after] = "end"
+    return out
+
+
 def group_names(notes: pd.DataFrame) -> pd.Series:
     """Group names of a table with technique, bow_direction, slur and run positions."""
     return (notes["technique"].astype(str) + "-" + notes["bow_direction"].astype(str) + "-"

@@ -26,6 +26,7 @@ import pandas as pd
 
 from data_schemas.errors import ParameterError
 from data_schemas.sampling import validate_targets
+from gesture_db.groups import chain_positions
 from pipelines.render import PartRender, RenderResult, choose_parts, mix
 from pipelines.rules import Event, Performance, fermata_warp
 
@@ -105,14 +106,6 @@ def technique_of(e: Event) -> str:
     return "detache"
 
 
-def _position(prev: np.ndarray, nxt: np.ndarray) -> np.ndarray:
-    out = np.full(prev.size, "iso", dtype=object)
-    out[~prev & nxt] = "init"
-    out[prev & nxt] = "mid"
-    out[prev & ~nxt] = "end"
-    return out
-
-
 def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.DataFrame,
                                                                           list[Event]]:
     """Sampling targets of the bowed events of one part.
@@ -141,7 +134,7 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.Da
                                       < 1e-3)
     has_next = np.r_[joined_next, False]
     has_prev = np.r_[False, joined_next]
-    run = _position(has_prev, has_next)
+    run = chain_positions(has_prev, has_next)
     tech = np.array([technique_of(e) for e in bowed], object)
     slur = np.array([e.slur_position if t == "legato" else "iso"
                      for e, t in zip(bowed, tech, strict=True)], object)
@@ -150,7 +143,7 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.Da
     prev_s = np.r_[False, in_slur[1:] & in_slur[:-1] & has_prev[1:]
                    & np.array([b.cont for b in bowed[1:]])]
     next_s = np.r_[prev_s[1:], False]
-    slur = np.where(in_slur, _position(prev_s, next_s), slur)
+    slur = np.where(in_slur, chain_positions(prev_s, next_s), slur)
     tech = np.where(in_slur & (slur == "iso"), "detache", tech)
     played = np.array([max(e.played_end - e.t0, 1e-3) for e in bowed])
     ioi = np.r_[t0[1:] - t0[:-1], np.inf]
