@@ -2,13 +2,14 @@
 
 from synth.listening.training import TrainingSettings
 
-TINY = TrainingSettings(settle=0.5, record=0.3, band_clips=1, k_candidates=(1.03, 1.08),
-                        k_repeats=1, k_note=0.4, f_candidates=3, f_rounds=1, f_repeats=1,
-                        f_note=0.35)
+TINY = TrainingSettings(settle=0.5, record=0.3, band_clips=1, k_candidates=(1.005, 1.02),
+                        k_repeats=1, k_note=0.5, f_candidates=4, f_rounds=1, f_repeats=1,
+                        f_note=0.5)
 
 import pytest  # noqa: E402
 
 PAIR = (1, "mf")
+MF_PAIRS = [(s, "mf") for s in range(4)]
 
 
 @pytest.fixture(scope="session")
@@ -19,6 +20,16 @@ def models_dir(tmp_path_factory):
     out = tmp_path_factory.getbasetemp() / "listening-models"
     train_instrument("violin", out, pairs=[PAIR], settings=TINY, workers=1, progress=False)
     return out
+
+
+@pytest.fixture(scope="session")
+def mf_models_dir(models_dir):
+    """All four violin mf pairs (TINY grids, two workers), beside the D-string pair."""
+    from pipelines.train import train_instrument
+
+    train_instrument("violin", models_dir, pairs=MF_PAIRS, settings=TINY, workers=2,
+                     progress=False)
+    return models_dir
 
 
 def d_string_notes():

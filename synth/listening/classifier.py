@@ -103,20 +103,25 @@ class FastPredictor:
         self.intercept = np.asarray(svc.intercept_, np.float64)
         self.classes = np.asarray(svc.classes_)
         counts = np.asarray(svc.n_support_)
-        self.starts = np.concatenate([[0], np.cumsum(counts)])
+        starts = np.concatenate([[0], np.cumsum(counts)])
         n = self.classes.size
-        self.pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
+        pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
+        # One row of coefficients per one-vs-one pair: decision = coef @ kernel + intercept.
+        self.coef = np.zeros((len(pairs), self.sv.shape[0]))
+        for p, (i, j) in enumerate(pairs):
+            self.coef[p, starts[i]:starts[i + 1]] = self.dual[j - 1, starts[i]:starts[i + 1]]
+            self.coef[p, starts[j]:starts[j + 1]] = self.dual[i, starts[j]:starts[j + 1]]
+        self.first = np.array([i for i, _ in pairs], np.int64)
+        self.second = np.array([j for _, j in pairs], np.int64)
+        self.gamma_sv_norm = -self.gamma * self.sv_norm
+        self.sv2 = 2.0 * self.gamma * self.sv
 
     def __call__(self, x: np.ndarray) -> int:
         """Class of one feature row [shape=(n_features,)]."""
-        z = (np.asarray(x, np.float64) - self.mean) / self.scale
-        k = np.exp(-self.gamma * (self.sv_norm - 2.0 * self.sv @ z + z @ z))
-        votes = np.zeros(self.classes.size, np.int64)
-        st = self.starts
-        for p, (i, j) in enumerate(self.pairs):
-            s = (self.dual[j - 1, st[i]:st[i + 1]] @ k[st[i]:st[i + 1]]
-                 + self.dual[i, st[j]:st[j + 1]] @ k[st[j]:st[j + 1]] + self.intercept[p])
-            votes[i if s > 0 else j] += 1
+        z = (x - self.mean) / self.scale
+        k = np.exp(self.gamma_sv_norm + self.sv2 @ z - self.gamma * (z @ z))
+        winners = np.where(self.coef @ k + self.intercept > 0, self.first, self.second)
+        votes = np.bincount(winners, minlength=self.classes.size)
         return int(self.classes[int(np.argmax(votes))])
 
 
@@ -134,7 +139,8 @@ def data_hash(features: np.ndarray, labels: np.ndarray) -> str:
 
 
 def fit_pair(features: np.ndarray, labels: np.ndarray, *, instrument: str, string: int,
-             dynamic: str, folds: int = 10, seed: int = 0, C: float = 10.0) -> PairModel:
+             dynamic: str, folds: int = 10, seed: int = 0, C: float = 10.0,
+             groups: np.ndarray | None = None) -> PairModel:
     """Train a pair's classifier and measure its cross-validated accuracy.
 
     Parameters
@@ -145,18 +151,22 @@ def fit_pair(features: np.ndarray, labels: np.ndarray, *, instrument: str, strin
     instrument, string, dynamic
         The pair.
     folds : int
-        Stratified folds (reduced to the smallest class size if needed, at least 2).
+        Cross-validation folds (at least 2; without ``groups`` reduced to the smallest
+        class size).
     seed : int
         Shuffling seed of the folds.
     C : float
         SVC regularisation.
+    groups : np.ndarray [shape=(n_hops,)], optional
+        Clip of each hop: folds then keep a clip's hops together (StratifiedGroupKFold), so
+        the accuracy is that on unheard clips, not on neighbouring hops of heard ones.
 
     Returns
     -------
     PairModel
     """
     import sklearn
-    from sklearn.model_selection import StratifiedKFold, cross_val_score
+    from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold, cross_val_score
     from sklearn.pipeline import make_pipeline
     from sklearn.preprocessing import StandardScaler
     from sklearn.svm import SVC
@@ -165,12 +175,16 @@ def fit_pair(features: np.ndarray, labels: np.ndarray, *, instrument: str, strin
     y = np.asarray(labels, np.int64)
     classes, counts = np.unique(y, return_counts=True)
     pipeline = make_pipeline(StandardScaler(), SVC(C=C, gamma="scale", kernel="rbf"))
-    k = int(min(folds, counts.min())) if classes.size > 1 else 0
+    if groups is not None:
+        k = int(min(folds, np.unique(groups).size)) if classes.size > 1 else 0
+        cv = StratifiedGroupKFold(n_splits=max(k, 2), shuffle=True, random_state=seed)
+    else:
+        k = int(min(folds, counts.min())) if classes.size > 1 else 0
+        cv = StratifiedKFold(n_splits=max(k, 2), shuffle=True, random_state=seed)
     if k >= 2:
-        cv = StratifiedKFold(n_splits=k, shuffle=True, random_state=seed)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            accuracy = float(np.mean(cross_val_score(pipeline, X, y, cv=cv)))
+            accuracy = float(np.mean(cross_val_score(pipeline, X, y, cv=cv, groups=groups)))
     else:
         accuracy = float("nan")
     if classes.size > 1:
@@ -185,6 +199,7 @@ def fit_pair(features: np.ndarray, labels: np.ndarray, *, instrument: str, strin
         "data_hash": data_hash(X, y),
         "cv_accuracy": accuracy,
         "cv_folds": k,
+        "cv_split": "by clip" if groups is not None else "by hop",
         "n_hops": int(y.size),
         "class_counts": {int(c): int(n) for c, n in zip(classes, counts, strict=True)},
     }

@@ -213,8 +213,9 @@ def clip_features(clips: list[JudgedClip], *,
 def fit_from_clips(clips: list[JudgedClip], *, instrument: str, string: int, dynamic: str,
                    lane: tuple[float, float] | None = None, seed: int = 0) -> PairModel:
     """Train the pair's classifier on the hops of judged clips; store lane and force range."""
-    X, y, _ = clip_features(clips)
-    model = fit_pair(X, y, instrument=instrument, string=string, dynamic=dynamic, seed=seed)
+    X, y, index = clip_features(clips)
+    model = fit_pair(X, y, instrument=instrument, string=string, dynamic=dynamic, seed=seed,
+                     groups=index)
     v, beta = lane or DEFAULT_LANES[dynamic]
     audible = [j.force for j in clips if j.label >= 2] or [j.force for j in clips]
     model.metadata.update(

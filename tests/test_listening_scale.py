@@ -1,0 +1,43 @@
+"""Acceptance: a two-octave scale under feedback control sounds right (issue 4, item 7)."""
+
+import pytest
+from _listening import mf_models_dir, models_dir  # noqa: F401
+
+from pipelines.evaluate import evaluate
+from pipelines.feedback import render_feedback, scale_notes
+from pipelines.rules import perform_part
+from pipelines.rules_config import load_config
+from synth import render_with_diagnostics
+
+CFG = load_config()
+
+
+@pytest.fixture(scope="module")
+def scale():
+    """G3..G5 major scale at mf, one note per second: every violin string."""
+    return scale_notes(tonic=55, octaves=2)
+
+
+@pytest.fixture(scope="module")
+def feedback_share(mf_models_dir, scale):  # noqa: F811
+    audio, actions, diagnostics, _ = render_feedback(scale, CFG, models_dir=mf_models_dir,
+                                                     instrument="violin", seed=0)
+    piece = evaluate(audio, actions, diagnostics=diagnostics)["piece"]
+    assert piece["notes"] == len(scale)
+    return piece["sustained_class3_share"]
+
+
+@pytest.mark.xfail(strict=False, reason="measured 75 % with the tests' TINY training and 88 % on "
+                   "the 30 s bench scale with QUICK training (rules' force table: 94 %); "
+                   "issue 4 target 90 % not met yet")
+def test_scale_under_feedback_is_class_3_on_nine_tenths_of_sustained_hops(feedback_share):
+    assert feedback_share >= 0.9
+
+
+@pytest.mark.parametrize("force", [0.1, 4.0])
+def test_scale_under_feedback_beats_wrong_fixed_forces(feedback_share, scale, force):
+    wrong = perform_part(scale, CFG, instrument="violin").actions.copy()
+    wrong.loc[wrong["bow_force"] > 0, "bow_force"] = force
+    audio, diagnostics = render_with_diagnostics(wrong, instrument="violin", seed=0)
+    theirs = evaluate(audio, wrong, diagnostics=diagnostics)["piece"]["sustained_class3_share"]
+    assert feedback_share > theirs + 0.5, (force, feedback_share, theirs)
