@@ -4,14 +4,18 @@
    clip is judged 5, go back to 0.5 N and halve until one is judged 1, then fill gaps between
    judged forces until every class has an example (and a few clips cover the class-3 band).
 2. :func:`fit_from_clips`: features of every recorded hop, labelled with its clip's class,
-   train the pair's scaler + SVC (10-fold CV accuracy in the metadata).
-3. :func:`search_k`: play the training pattern (three fingers, notes starting at F_max/16,
-   F_max/4 and F_max) under feedback with each candidate K; note cost = product over runs of
-   same-sign error of (1 + sum (3 - c)^2) (the paper's eq. 7; the 1 + keeps a perfect run from
-   zeroing the product); inter-quartile geometric mean over repeats; lowest cost wins.
-4. :func:`search_initial_force`: per finger, cost = sum (3 - c)^2 over the attack (until the
-   mean of (3 - c)^2 over the last 9 hops drops below 0.5); candidates log-spaced from F_min to
-   F_max, zoomed in around the best a few times.
+   train the pair's scaler + SVC (10-fold CV by clip in the metadata: a clip's hops stay in
+   one fold).
+3. :func:`search_initial_force` (first, with the smallest K): per finger, practice notes start
+   at forces log-spaced over that finger's class-3 band; the teacher judges every sustained
+   hop and the cost is sum (3 - c)^2 (the attack's cost plus later errors); median over
+   repeats, zoomed in around the best; ties go to the band's centre.
+4. :func:`search_k`: the pattern (three fingers, starts at half, once and twice the initial
+   force) under feedback with each candidate K, judged by the teacher; note cost =
+   product over runs of same-sign error of (1 + sum (3 - c)^2) (the paper's eq. 7; the 1 +
+   keeps a perfect run from zeroing the product); inter-quartile geometric mean over
+   repeats; lowest cost wins. The teacher judging practice notes stands in for the human of
+   the paper's practice step; the controller itself stays black-box when it plays.
 
 Everything is deterministic given ``seed``.
 """
