@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from data_schemas.actions import validate_actions
+from data_schemas.actions import ACTIONS, validate_actions
 from pipelines.instruments import choose_strings, fit_range, get_instrument
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
@@ -450,6 +450,9 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
     bowing_rows = ~actions["pluck"].to_numpy(bool)
     factors = string_force_factors(name)[actions["string"].to_numpy(int)]
     actions.loc[bowing_rows, "bow_force"] *= factors[bowing_rows]
+    # An accent on a cello C string can ask more than the actions table allows.
+    limit = ACTIONS.column("bow_force").maximum
+    actions["bow_force"] = actions["bow_force"].clip(upper=limit)
     table = pd.DataFrame({
         "t0": [e.t0 for e in events], "played_end": [e.played_end for e in events],
         "end": [e.end for e in events], "label": [e.label for e in events],
