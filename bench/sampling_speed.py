@@ -133,7 +133,7 @@ def main() -> None:
         sdb = open_database(work / "db")
         t = time.perf_counter()
         res = render_sampling(notes, db=sdb, models=args.models, progress=False)
-        rtf = (time.perf_counter() - t) / (res.audio.size / 44100)
+        rtf = (res.audio.size / 44100) / (time.perf_counter() - t)  # audio s per compute s
     else:
         reason = "no --models given (train them with arco train)"
     out = {"search": rows, "predictor_fit_seconds": round(fit_s, 2),
