@@ -8,6 +8,7 @@ used. Figures: shared/reference/modal-string.md.
 
 from __future__ import annotations
 
+import functools
 import os
 
 import numpy as np
@@ -30,13 +31,15 @@ ROLL_OFF_START_HZ = 3000.0
 ROLL_OFF_DB_PER_OCTAVE = 15.0
 
 
-def synthesize_body_ir(
-    sample_rate: int,
-    *,
-    body_scale: float = 1.0,
-    duration: float = 0.08,
-    seed: int = 0,
-) -> np.ndarray:
+@functools.lru_cache(maxsize=16)
+def _synthesized(sample_rate: int, body_scale: float, duration: float, seed: int) -> np.ndarray:
+    ir = _synthesize(sample_rate, body_scale=body_scale, duration=duration, seed=seed)
+    ir.setflags(write=False)
+    return ir
+
+
+def synthesize_body_ir(sample_rate: int, *, body_scale: float = 1.0, duration: float = 0.08,
+                       seed: int = 0) -> np.ndarray:
     """Synthesize a body impulse response (bridge force -> radiated pressure, arbitrary units).
 
     Parameters
@@ -52,8 +55,14 @@ def synthesize_body_ir(
     Returns
     -------
     np.ndarray [shape=(round(duration * sample_rate),)]
-        Impulse response with unit energy.
+        Impulse response with unit energy (a fresh copy; responses are cached by settings).
     """
+    return _synthesized(int(sample_rate), float(body_scale), float(duration), int(seed)).copy()
+
+
+def _synthesize(sample_rate: int, *, body_scale: float, duration: float,
+                seed: int) -> np.ndarray:
+    """Build the response :func:`synthesize_body_ir` describes."""
     rng = np.random.default_rng(seed)
     n = int(round(duration * sample_rate))
     t = np.arange(n) / sample_rate

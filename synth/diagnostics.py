@@ -45,6 +45,19 @@ class ContactDiagnostics:
 _NO_ONSETS = np.zeros(0)
 
 
+def _median_interval(first: float, later: np.ndarray) -> float:
+    """Median interval (s) of the onsets ``first, *later``; NaN with fewer than two."""
+    if later.size == 0:
+        return float("nan")
+    if later.size == 1:
+        return float(later[0] - first)
+    intervals = np.diff(later, prepend=first)
+    intervals.sort()
+    mid = intervals.size // 2
+    return float(intervals[mid] if intervals.size % 2 else 0.5 * (intervals[mid - 1]
+                                                                  + intervals[mid]))
+
+
 @njit(cache=True)
 def _summarise(contact, slip_velocity, was_slipping, onsets):  # pragma: no cover - numba
     """Count slip onsets (written to ``onsets``), slipping and contact samples, slip sum."""
@@ -90,12 +103,10 @@ class OnsetTracker:
         n_onsets, n_slip, n_contact, slip_sum = _summarise(
             contact, slip_velocity, self._last_state == CONTACT_SLIP, onsets)
         times = (start_sample + onsets[:n_onsets]) / self.internal_rate
-        if n_onsets >= 2 or (n_onsets == 1 and np.isfinite(self._last_onset)):
-            known = np.concatenate([[self._last_onset], times]) if np.isfinite(
-                self._last_onset) else times
-            period = float(np.median(np.diff(known)))
+        if np.isfinite(self._last_onset):
+            period = _median_interval(self._last_onset, times)
         else:
-            period = float("nan")
+            period = _median_interval(times[0], times[1:]) if n_onsets else float("nan")
         if contact.size:
             self._last_state = int(contact[-1])
         if n_onsets:
