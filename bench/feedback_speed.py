@@ -67,7 +67,7 @@ def main() -> None:
                   "per_pair_seconds": {r["key"]: round(r["seconds"], 1) for r in trained}},
         "accuracy": table,
         "render": {"audio_seconds": round(seconds, 2), "seconds": round(render_s, 2),
-                   "realtime_factor": round(seconds / render_s, 2), "target": 20.0},
+                   "real_time_factor": round(seconds / render_s, 2), "target": 20.0},
         "sustained_class3_share": {k: round(v["sustained_class3_share"], 3)
                                    for k, v in results.items()},
         "evaluation": results,
