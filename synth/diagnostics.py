@@ -47,14 +47,12 @@ _NO_ONSETS = np.zeros(0)
 
 def _median_interval(first: float, later: np.ndarray) -> float:
     """Median interval (s) of the onsets ``first, *later``; NaN with fewer than two."""
-    if later.size == 0:
+    times = [first, *later.tolist()]
+    intervals = sorted(b - a for a, b in zip(times[:-1], times[1:], strict=True))
+    if not intervals:
         return float("nan")
-    if later.size == 1:
-        return float(later[0] - first)
-    intervals = np.diff(later, prepend=first)
-    intervals.sort()
-    mid = intervals.size // 2
-    return float(intervals[mid] if intervals.size % 2 else 0.5 * (intervals[mid - 1]
+    mid = len(intervals) // 2
+    return float(intervals[mid] if len(intervals) % 2 else 0.5 * (intervals[mid - 1]
                                                                   + intervals[mid]))
 
 

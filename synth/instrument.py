@@ -366,15 +366,25 @@ class Instrument:
                           float(given.finger_ratio[a]), view)
 
 
+def _control_ranges() -> tuple[tuple[str, float, float, bool, bool, str], ...]:
+    """(name, minimum, maximum, exclusive minimum, exclusive maximum, range text) per control."""
+    out = []
+    for name in ("bow_force", "bow_velocity", "beta", "finger_ratio"):
+        c = ACTIONS.column(name)
+        out.append((name, -np.inf if c.minimum is None else c.minimum,
+                    np.inf if c.maximum is None else c.maximum, c.exclusive_minimum,
+                    c.exclusive_maximum, f"{c.range_text()} ({c.unit})"))
+    return tuple(out)
+
+
+_CONTROL_RANGES = _control_ranges()
+
+
 def _check_control(control: BowControl, string: int) -> None:
     """Reject controls outside the ranges the actions table documents."""
-    for name in ("bow_force", "bow_velocity", "beta", "finger_ratio"):
-        column = ACTIONS.column(name)
+    for name, low, high, open_low, open_high, text in _CONTROL_RANGES:
         value = getattr(control, name)
-        low_ok = column.minimum is None or (
-            value > column.minimum if column.exclusive_minimum else value >= column.minimum)
-        high_ok = column.maximum is None or (
-            value < column.maximum if column.exclusive_maximum else value <= column.maximum)
-        if not (np.isfinite(value) and low_ok and high_ok):
-            raise ParameterError(f"{name}={value} on string {string} is outside "
-                                 f"{column.range_text()} ({column.unit})")
+        ok = (value > low if open_low else value >= low) and (
+            value < high if open_high else value <= high)
+        if not ok:  # also rejects NaN
+            raise ParameterError(f"{name}={value} on string {string} is outside {text}")
