@@ -15,6 +15,7 @@ force, so the sampled contour keeps its shape while its level follows the ear.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 from dataclasses import dataclass, field
@@ -343,8 +344,8 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
 
     The single integration point with :mod:`synth.listening.controller`: the hop plan of the
     sampled actions comes from :func:`pipelines.feedback.hop_plan`; per string a
-    :class:`~synth.listening.controller.ForceController` (no range clamp) holds a
-    correction factor that starts at 1 on every stroke and is multiplied by
+    controller (:func:`synth.listening.controller.perform` with ``planned_force``, no range
+    clamp) holds a correction factor that starts at 1 on every stroke and is multiplied by
     ``K**(3 - c_avg)`` from the classes it hears; the force played is the sampled force
     times that factor (clipped to 0..50 N).
 
@@ -358,15 +359,10 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     """
     from pipelines.feedback import TAIL, diagnostics_table, hop_plan, played_actions
     from pipelines.rules_config import load_config
-    from synth.instrument import BowControl, Instrument
+    from synth.instrument import Instrument
     from synth.listening.classifier import load_models
-    from synth.listening.controller import (
-        ControllerSettings,
-        ForceController,
-        PerformanceLog,
-        _model_for,
-    )
-    from synth.listening.features import HOP, StreamingFeatures, yin_window_for
+    from synth.listening.controller import ControllerSettings, perform
+    from synth.listening.features import HOP
 
     if sample_rate not in (44100, 48000):
         raise ParameterError(f"sample_rate={sample_rate}: feedback control needs 44100 or "
@@ -389,59 +385,14 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
         stroke = np.cumsum(plan.note_start[:, int(s)])
         peak = pd.Series(speed).groupby(stroke).transform("max").to_numpy()
         target_speed[:, int(s)] = peak
-    settings = ControllerSettings(range_margin=0.0)
-    rng = np.random.default_rng([seed, 2])
+    plan = dataclasses.replace(plan, target_speed=target_speed)
     inst = Instrument(instrument, sample_rate=sample_rate, seed=seed)
-    controllers: dict[int, ForceController] = {}
-    listeners: dict[int, StreamingFeatures] = {}
-    features: dict[int, np.ndarray | None] = {}
-    current: dict[int, str] = {}
-    audio = np.zeros(n * HOP, np.float32)
-    force_log = np.zeros((n, n_strings))
-    vel_log = np.zeros((n, n_strings))
-    classes = np.zeros((n, n_strings), np.int64)
-    diag: dict[int, list] = {s: [] for s in range(n_strings)}
-    for k in range(n):
-        controls = {}
-        for s in np.flatnonzero(plan.bowed[k]):
-            s = int(s)
-            model = _model_for(models, s, str(plan.dynamic[k, s]))
-            ctl = controllers.get(s)
-            if ctl is None:
-                ctl = controllers[s] = ForceController(model, rng, settings)
-            if current.get(s) != model.dynamic:
-                ctl.set_model(model)
-                current[s] = model.dynamic
-            if plan.note_start[k, s]:
-                ctl.start_note(plan.semitones[k, s], force=1.0)
-                features[s] = None
-            elif not plan.finger_change[k, s]:
-                speed = abs(float(plan.velocity[k - 1, s])) if k else 0.0
-                classes[k, s] = ctl.step(features.get(s), speed, float(target_speed[k, s]))
-            force = float(np.clip(sampled[k, s] * ctl.force, 0.0, 50.0))
-            v = float(np.clip(plan.velocity[k, s], -5.0, 5.0))
-            ratio = min(1.0 - 2.0 ** (-float(plan.semitones[k, s]) / 12.0), 0.8)
-            controls[s] = BowControl(v, force, float(plan.beta[k, s]), ratio)
-            force_log[k, s] = force
-            vel_log[k, s] = v
-        block = inst.process(HOP, controls, plucks=plan.plucks[k] if plan.plucks else ())
-        for s, d in block.diagnostics.items():
-            diag[s].append((k, d))
-        audio[k * HOP:(k + 1) * HOP] = block.audio
-        for s in controls:
-            f0 = float(plan.expected_f0[k, s])
-            lis = listeners.get(s)
-            if lis is None:
-                lis = listeners[s] = StreamingFeatures(sample_rate,
-                                                       yin_window=yin_window_for(f0, sample_rate))
-            if plan.note_start[k, s]:
-                lis.reset()
-            feats = lis.push(block.audio, f0)
-            features[s] = feats if lis.ready else None
+    log = perform(plan, models, inst, rng=np.random.default_rng([seed, 2]),
+                  settings=ControllerSettings(range_margin=0.0), record_diagnostics=True,
+                  planned_force=sampled)
     tail = inst.process(int(TAIL * sample_rate), {}).audio
-    log = PerformanceLog(audio, force_log, vel_log, classes, diag)
     played = played_actions(perf, plan, span, log, sample_rate=sample_rate)
-    y = np.concatenate([audio, tail]).astype(np.float32)
+    y = np.concatenate([log.audio, tail]).astype(np.float32)
     return y, played, diagnostics_table(log, sample_rate)
 
 

@@ -206,8 +206,13 @@ class PerformanceLog:
 def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument: Instrument, *,
             rng: np.random.Generator, settings: ControllerSettings | None = None,
             K: float | None = None, initial_force: float | None = None,
-            record_diagnostics: bool = False) -> PerformanceLog:
+            record_diagnostics: bool = False,
+            planned_force: np.ndarray | None = None) -> PerformanceLog:
     """Play a hop plan with feedback control of the bow force.
+
+    Without ``planned_force`` the controller owns the force (feedback control). With it,
+    the controller holds a correction factor that starts at 1 on every stroke and the force
+    played is the planned force times that factor (gesture sampling with correction).
 
     Parameters
     ----------
@@ -226,6 +231,8 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     record_diagnostics : bool
         Keep the instrument's per-hop contact diagnostics (for the evaluation; the
         controller never sees them).
+    planned_force : np.ndarray [shape=(n, n_strings)], N, optional
+        Force to correct instead of choosing one.
 
     Returns
     -------
@@ -255,9 +262,10 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
                 ctl.set_model(model, K=K)
                 current[s] = model.dynamic
             if plan.note_start[k, s]:
-                ctl.start_note(plan.semitones[k, s], initial_force)
+                ctl.start_note(plan.semitones[k, s],
+                               initial_force if planned_force is None else 1.0)
                 features[s] = None
-            elif plan.finger_change[k, s]:
+            elif plan.finger_change[k, s] and planned_force is None:
                 old = plan.semitones[k - 1, s] if k else plan.semitones[k, s]
                 ctl.rescale(model.initial_force(plan.semitones[k, s])
                             / max(model.initial_force(old), 1e-9))
@@ -269,8 +277,10 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
                 v *= 1.0 + jitter * float(rng.standard_normal())
             v = float(np.clip(v, -5.0, 5.0))
             ratio = 1.0 - 2.0 ** (-float(plan.semitones[k, s]) / 12.0)
-            controls[s] = BowControl(v, ctl.force, float(plan.beta[k, s]), min(ratio, 0.8))
-            force_log[k, s] = ctl.force
+            force = ctl.force if planned_force is None else float(
+                np.clip(planned_force[k, s] * ctl.force, 0.0, MAX_FORCE))
+            controls[s] = BowControl(v, force, float(plan.beta[k, s]), min(ratio, 0.8))
+            force_log[k, s] = force
             vel_log[k, s] = v
         plucks = plan.plucks[k] if plan.plucks else ()
         block = instrument.process(HOP, controls, plucks=plucks)
