@@ -25,10 +25,14 @@ test: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 
+# Every benchmark prints one JSON object; the listening models trained by feedback_speed
+# are reused by sampling_speed (out/bench-models).
 bench: $(STAMP) stk
-	@for script in bench/synth_speed.py bench/score_speed.py bench/build_db.py; do \
-	  if [ -f $$script ]; then echo "== $$script"; $(BIN)/python $$script --json || exit 1; fi; \
-	done
+	$(BIN)/python bench/synth_speed.py --json
+	$(BIN)/python bench/score_speed.py --json
+	$(BIN)/python bench/build_db.py --json
+	$(BIN)/python bench/feedback_speed.py --json --workers 2 --models out/bench-models
+	$(BIN)/python bench/sampling_speed.py --json --models out/bench-models
 
 # STK's Bowed waveguide is the speed peer of bench/synth_speed.py (Debian's libstk-dev).
 stk:
