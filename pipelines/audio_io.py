@@ -1,4 +1,9 @@
-"""Write rendered audio atomically as WAV (32-bit float) or FLAC (24-bit)."""
+"""Write rendered audio atomically as WAV (32-bit float) or FLAC (24-bit).
+
+WAV files are written by :func:`scipy.io.wavfile.write`, which adds no time-stamped chunk
+(libsndfile's float WAVs carry a PEAK chunk with the writing time), so the same audio
+gives the same file, byte for byte.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +11,7 @@ import os
 from pathlib import Path
 
 import numpy as np
+import scipy.io.wavfile
 import soundfile as sf
 
 from data_schemas.errors import ParameterError
@@ -38,5 +44,8 @@ def write_audio(path: str | os.PathLike, audio: np.ndarray, sample_rate: int) ->
     if fmt[0] == "FLAC":
         data = np.clip(data, -1.0, 1.0)
     with atomic_path(path) as tmp:
-        sf.write(tmp, data, sample_rate, format=fmt[0], subtype=fmt[1])
+        if fmt[0] == "WAV":
+            scipy.io.wavfile.write(tmp, sample_rate, data)
+        else:
+            sf.write(tmp, data, sample_rate, format=fmt[0], subtype=fmt[1])
     return path

@@ -1,6 +1,9 @@
 """The synth CLI: determinism, formats, and clear errors on bad input."""
 
 import hashlib
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pandas as pd
@@ -31,7 +34,12 @@ def test_same_actions_and_seed_give_bit_identical_wav(tmp_path):
     write_actions(stroke(), actions)
     paths = [tmp_path / f"{k}.wav" for k in "abc"]
     for path, seed in zip(paths, (7, 7, 8), strict=True):
-        assert main(["synth", str(actions), "-o", str(path), "--seed", str(seed), "--quiet"]) == 0
+        # Separate processes, a second apart: no state and no time stamp may leak into files.
+        run = subprocess.run([sys.executable, "-m", "pipelines.cli", "synth", str(actions),
+                              "-o", str(path), "--seed", str(seed), "--quiet"],
+                             capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        time.sleep(1.1)
     assert digest(paths[0]) == digest(paths[1])
     assert digest(paths[0]) != digest(paths[2])
     audio, rate = sf.read(paths[0], dtype="float32")
