@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from data_schemas.actions import ACTIONS
 from data_schemas.errors import ParameterError
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
@@ -209,6 +210,34 @@ def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
     return validate_actions(table.reset_index(drop=True), source="gesture sampling")
 
 
+def adapt_forces(actions: pd.DataFrame, instrument: str,
+                 search_config: dict[str, Any]) -> pd.DataFrame:
+    """Rescale recorded bow forces to the instrument model's strings.
+
+    The recorded performer played another instrument; each of this model's strings has its
+    own Helmholtz window (its ``reference_force``, measured at 0.3 m/s and beta 0.1). Forces
+    are multiplied by ``reference_force / recorded_reference_force`` per string, where
+    ``recorded_reference_force`` (``[render]`` in the search settings, N) is the recordings'
+    typical force at that velocity and beta (0.6 N for the simulated performer).
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy with rescaled ``bow_force`` (pluck rows untouched).
+    """
+    from pipelines.rules import string_force_factors
+
+    recorded = float(search_config.get("render", {}).get("recorded_reference_force", 0.0))
+    if recorded <= 0.0:
+        return actions
+    out = actions.copy()
+    bowed = ~out["pluck"].to_numpy(bool)
+    factor = string_force_factors(instrument)[out["string"].to_numpy(int)] / recorded
+    out.loc[bowed, "bow_force"] = np.clip(out.loc[bowed, "bow_force"] * factor[bowed], 0.0,
+                                          ACTIONS.column("bow_force").maximum)
+    return out
+
+
 def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[str, Any], *,
                 instrument: str | None = None, warp=None, transpose_octaves: bool = False,
                 rng: np.random.Generator | None = None) -> tuple[Performance, pd.DataFrame,
@@ -235,6 +264,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     result = search(targets, database.index, predictors=database.predictors,
                     config=database.search_config)
     actions = render_samples(targets, result.choices, database.contours)
+    actions = adapt_forces(actions, _name, database.search_config)
     actions = _extra_rows(actions, events)
     warnings = [f"note group {g} is not in the database; sampled from {r}"
                 for g, r in sorted(result.fallbacks.items())]
