@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from data_schemas.errors import ParameterError
+from gesture_db.viterbi import backtrack
 
 
 @njit(cache=True)
@@ -52,15 +53,7 @@ def _viterbi_kernel(target, n_cand, start, end, link, scale, w_c):  # pragma: no
                     arg = j
             acc[m, i] = best + target[m, i]
             back[m, i] = arg
-    path = np.zeros(M, np.int64)
-    best = np.inf
-    for i in range(n_cand[M - 1]):
-        if acc[M - 1, i] < best:
-            best = acc[M - 1, i]
-            path[M - 1] = i
-    for m in range(M - 1, 0, -1):
-        path[m - 1] = back[m, path[m]]
-    return path, best
+    return backtrack(acc, back, n_cand)
 
 
 def viterbi(target: np.ndarray, n_cand: np.ndarray, start: np.ndarray, end: np.ndarray,

@@ -24,6 +24,8 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
+from gesture_db.viterbi import backtrack
+
 DIR, START, STOP, FINGER, VMIN = 0, 1, 2, 3, 4
 EVENT_NAMES = ("dir", "start", "stop", "finger", "vmin")
 
@@ -251,15 +253,7 @@ def _viterbi_kernel(cand_time, local, n_cand, nominal, link, w_ioi, min_gap):  #
             if best < np.inf:
                 acc[k, c] = best + local[k, c]
                 back[k, c] = arg
-    path = np.zeros(K, np.int64)
-    best = np.inf
-    for c in range(n_cand[K - 1]):
-        if acc[K - 1, c] < best:
-            best = acc[K - 1, c]
-            path[K - 1] = c
-    for k in range(K - 1, 0, -1):
-        path[k - 1] = back[k, path[k]]
-    return path
+    return backtrack(acc, back, n_cand)[0]
 
 
 def viterbi_boundaries(cand_time: np.ndarray, local: np.ndarray, n_cand: np.ndarray,
