@@ -21,10 +21,9 @@ MODE_LIFTED, MODE_BOW, MODE_GRIP = 0, 1, 2
 _FAST = {"reassoc", "contract", "nsz", "arcp"}
 
 
-#: Rows of the packed per-mode coefficient array (see :func:`synth.modal.pack_coefficients`).
-ROW_AA, ROW_AV, ROW_VA, ROW_VV, ROW_PUSH_A_BOW, ROW_PUSH_V_BOW = 0, 1, 2, 3, 4, 5
-ROW_PUSH_A_FINGER, ROW_PUSH_V_FINGER, ROW_SHAPE_BOW, ROW_SHAPE_FINGER, ROW_BRIDGE = 6, 7, 8, 9, 10
-N_ROWS = 11
+# Rows of the packed per-mode coefficient array (:func:`synth.modal.pack_coefficients`):
+# free step a<-a, a<-v, v<-a, v<-v; bow push into a, v; finger push into a, v; bow shape;
+# finger shape; bridge gain.
 
 
 @njit(cache=True, fastmath=_FAST, error_model="numpy")
@@ -36,7 +35,7 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     ``modal_state`` [shape=(2, n_modes)] holds modal displacements (m) and velocities (m/s)
     and ``last_forces`` the bow and finger forces (N) of the previous sample; both are
     updated in place. The states exclude ``last_forces``, which the next free step folds in
-    through the push rows of ``coefficients`` [shape=(N_ROWS, n_modes)].
+    through the push rows of ``coefficients`` [shape=(11, n_modes)].
     ``gains`` = (H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge per bow force, bridge per finger
     force), ``friction`` = (mu_s, mu_d, v0 m/s, noise depth), ``finger_spring`` = (K N/m,
     R N s/m). Writes bridge force (N), slip velocity (m/s) and contact state per sample.

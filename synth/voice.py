@@ -58,7 +58,6 @@ class StringVoice:
                  *, friction_noise: float = 0.02, max_modes: int | None = None,
                  max_mode_frequency: float | None = None) -> None:
         self.string = string
-        self.internal_rate = float(internal_rate)
         self.basis: ModeBasis = mode_basis(string, internal_rate, max_modes=max_modes,
                                            max_frequency=max_mode_frequency)
         self.rng = rng
