@@ -53,29 +53,53 @@ def anti_alias_taps(sample_rate: int, factor: int) -> np.ndarray:
 
 
 @njit(cache=True, fastmath={"reassoc", "contract", "nsz", "arcp"}, error_model="numpy")
-def _decimate(extended, offsets, values, factor, out):  # pragma: no cover - numba
-    """out[k] = sum_j values[j] extended[k factor + factor - 1 + offsets[j]] (non-zero taps)."""
+def _accumulate_phase(phase, taps, shift, out):  # pragma: no cover - numba
+    """out[k] += sum_q taps[q] phase[k + shift + q]: one polyphase branch (a dot per output)."""
+    # Index with loop counters only (no signed offsets) so that LLVM vectorises the dot.
+    segment = phase[shift:]
     for k in range(out.size):
-        start = k * factor + factor - 1
         acc = 0.0
-        for j in range(values.size):
-            acc += values[j] * extended[start + offsets[j]]
-        out[k] = acc
+        for q in range(taps.size):
+            acc += taps[q] * segment[k + q]
+        out[k] += acc
 
 
 class Decimator:
     """Streaming low-pass + decimation by an integer factor (factor 1 passes through).
 
     Output sample k of a block is the filtered internal sample ``k * factor + factor - 1``.
+    The filter runs in polyphase form: the input is split into its ``factor`` phases and
+    each phase meets only its own (non-zero) taps, so a half-band filter costs half its
+    length and every inner loop reads contiguous memory.
     """
 
     def __init__(self, sample_rate: int, factor: int) -> None:
         self.factor = int(factor)
         self.taps = anti_alias_taps(sample_rate, factor) if factor > 1 else np.ones(1)
+        # History long enough for the filter, rounded up to whole frames of `factor`.
+        memory = self.taps.size - 1
+        self._history = np.zeros(memory + (-memory) % self.factor)
+        self._branches = self._polyphase_branches(self._history.size - memory)
+
+    def _polyphase_branches(self, pad: int) -> list[tuple[int, np.ndarray, int]]:
+        """(phase, taps, shift) per phase holding non-zero taps.
+
+        Reversed tap i meets extended sample ``pad + k factor + factor - 1 + i``, i.e.
+        phase ``(pad + factor - 1 + i) % factor`` at frame ``k + (pad + factor - 1 + i) //
+        factor``.
+        """
         reversed_taps = self.taps[::-1]
-        self._offsets = np.flatnonzero(reversed_taps)
-        self._values = np.ascontiguousarray(reversed_taps[self._offsets])
-        self._history = np.zeros(self.taps.size - 1)
+        position = pad + self.factor - 1 + np.arange(reversed_taps.size)
+        branches = []
+        for phase in range(self.factor):
+            idx = np.flatnonzero((position % self.factor == phase) & (reversed_taps != 0.0))
+            if idx.size == 0:
+                continue
+            frames = position[idx] // self.factor
+            dense = np.zeros(frames[-1] - frames[0] + 1)
+            dense[frames - frames[0]] = reversed_taps[idx]
+            branches.append((phase, dense, int(frames[0])))
+        return branches
 
     def reset(self) -> None:
         """Clear the filter history."""
@@ -95,7 +119,9 @@ class Decimator:
         if self.factor == 1:
             return block.copy()
         extended = np.concatenate([self._history, block])
-        out = np.empty(block.size // self.factor)
-        _decimate(extended, self._offsets, self._values, self.factor, out)
+        phases = extended.reshape(-1, self.factor).T
+        out = np.zeros(block.size // self.factor)
+        for phase, taps, shift in self._branches:
+            _accumulate_phase(np.ascontiguousarray(phases[phase]), taps, shift, out)
         self._history = extended[extended.size - self._history.size:]
         return out

@@ -1,0 +1,57 @@
+"""Control frames -> per-sample bow velocity, force and contact mode (numba, plain arrays)."""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from synth.modal_kernel import MODE_BOW, MODE_LIFTED
+
+
+@njit(cache=True, error_model="numpy")
+def sample_bowing(frame_time, frame_velocity, frame_force, first_sample, sample_rate,
+                  out_velocity, out_force, out_mode):  # pragma: no cover - numba
+    """Interpolate one string's control frames at samples ``first_sample + i``.
+
+    Sample i is at time ``(first_sample + i) / sample_rate`` (s). Velocity (m/s) and force
+    (N) are linear between frames (times ``frame_time`` in s, increasing) and held beyond
+    the ends, as ``numpy.interp``; a sample exactly at a frame takes that frame's values.
+    The mode is MODE_BOW from the first frame to the last wherever the force is positive,
+    else MODE_LIFTED. Walks the frames once; the samples of each segment form one loop.
+    """
+    n = out_velocity.size
+    n_frames = frame_time.size
+    period = 1.0 / sample_rate
+    # Samples before the first frame and after the last hold the end values, bow lifted.
+    first = min(max(math.ceil(frame_time[0] * sample_rate) - first_sample, 0), n)
+    last = min(max(math.floor(frame_time[n_frames - 1] * sample_rate) - first_sample + 1,
+                   first), n)
+    for i in range(first):
+        out_velocity[i] = frame_velocity[0]
+        out_force[i] = frame_force[0]
+        out_mode[i] = MODE_LIFTED
+    i = first
+    j = 0
+    while i < last:
+        t = (first_sample + i) * period
+        while j < n_frames - 2 and frame_time[j + 1] <= t:
+            j += 1
+        end = last if j >= n_frames - 2 else min(
+            max(math.ceil(frame_time[j + 1] * sample_rate) - first_sample, i + 1), last)
+        t0 = frame_time[j]
+        span = frame_time[j + 1] - t0 if n_frames > 1 else 1.0
+        v0, f0 = frame_velocity[j], frame_force[j]
+        dv = (frame_velocity[j + 1] - v0) / span if n_frames > 1 else 0.0
+        df = (frame_force[j + 1] - f0) / span if n_frames > 1 else 0.0
+        for k in range(i, end):
+            dt = (first_sample + k) * period - t0
+            force = f0 + df * dt
+            out_velocity[k] = v0 + dv * dt
+            out_force[k] = force
+            out_mode[k] = MODE_BOW if force > 0.0 else MODE_LIFTED
+        i = end
+    for k in range(last, n):
+        out_velocity[k] = frame_velocity[n_frames - 1]
+        out_force[k] = frame_force[n_frames - 1]
+        out_mode[k] = MODE_LIFTED
