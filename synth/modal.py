@@ -181,15 +181,39 @@ def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float) -> 
     return ContactCoefficients(phi_b, phi_f, push_b, push_f, gains, fingered)
 
 
+#: The kernel's arrays start on this boundary (bytes) and hold a multiple of
+#: MODE_PADDING modes, so every row is aligned for 256-bit vector loads (misaligned rows
+#: measured up to a third slower).
+ALIGNMENT = 64
+MODE_PADDING = 4
+
+
+def padded_modes(n_modes: int) -> int:
+    """Modes rounded up to a multiple of :data:`MODE_PADDING` (the extra modes are zero)."""
+    return -(-n_modes // MODE_PADDING) * MODE_PADDING
+
+
+def aligned_zeros(shape: tuple[int, ...]) -> np.ndarray:
+    """Zero float64 array whose data starts on an :data:`ALIGNMENT`-byte boundary."""
+    size = int(np.prod(shape))
+    buffer = np.zeros(size + ALIGNMENT // 8)
+    offset = (-buffer.ctypes.data % ALIGNMENT) // 8
+    return buffer[offset:offset + size].reshape(shape)
+
+
 def pack_coefficients(basis: ModeBasis, contact: ContactCoefficients) -> np.ndarray:
     """Stack the per-mode coefficients in the row order the kernel reads.
 
     Returns
     -------
-    np.ndarray [shape=(11, n_modes)]
-        Rows: free step (4), bow push (2), finger push (2), bow shape, finger shape, bridge gain.
+    np.ndarray [shape=(11, padded_modes(n_modes))]
+        Rows: free step (4), bow push (2), finger push (2), bow shape, finger shape, bridge
+        gain; aligned, with zero coefficients for the padding modes (they never move).
     """
-    return np.ascontiguousarray(np.vstack([
+    rows = np.vstack([
         basis.free, contact.push_bow, contact.push_finger,
         contact.shape_bow[None], contact.shape_finger[None], basis.bridge_gain[None],
-    ]))
+    ])
+    packed = aligned_zeros((rows.shape[0], padded_modes(basis.n_modes)))
+    packed[:, :basis.n_modes] = rows
+    return packed

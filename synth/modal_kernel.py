@@ -28,7 +28,7 @@ _FAST = {"reassoc", "contract", "nsz", "arcp"}
 
 @njit(cache=True, fastmath=_FAST, error_model="numpy")
 def advance_string(modal_state, last_forces, coefficients, gains, finger_spring, friction,
-                   fingered, bow_velocity, bow_force, contact_mode, noise,
+                   fingered, bow_velocity, bow_force, contact_mode, rng,
                    out_bridge, out_slip_velocity, out_contact):  # pragma: no cover - numba
     """Advance one string by ``bow_velocity.size`` samples; see :mod:`synth.modal`.
 
@@ -39,6 +39,8 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     ``gains`` = (H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge per bow force, bridge per finger
     force), ``friction`` = (mu_s, mu_d, v0 m/s, noise depth), ``finger_spring`` = (K N/m,
     R N s/m). Writes bridge force (N), slip velocity (m/s) and contact state per sample.
+    ``rng`` (numpy.random.Generator) gives the friction noise: one uniform draw per slipping
+    sample, in sample order, so a seed fixes the sound.
     """
     modal_a = modal_state[0]
     modal_v = modal_state[1]
@@ -101,7 +103,7 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
                 out_contact[t] = CONTACT_STICK
             else:
                 # Hyperbolic friction, solved in closed form for the slip speed.
-                v0 = v0_nominal * (1.0 - noise_depth * noise[t])
+                v0 = v0_nominal * (1.0 - noise_depth * rng.random())
                 d = abs(dv)
                 b = v0 - d + admittance * normal * mu_d
                 c = -v0 * (d - admittance * normal * mu_s)

@@ -6,7 +6,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from synth.modal import ModeBasis, contact_coefficients, mode_basis, pack_coefficients
+from synth.modal import (
+    ModeBasis,
+    aligned_zeros,
+    contact_coefficients,
+    mode_basis,
+    pack_coefficients,
+    padded_modes,
+)
 from synth.modal_kernel import advance_string
 from synth.strings import StringConstants
 
@@ -61,7 +68,7 @@ class StringVoice:
         self.basis: ModeBasis = mode_basis(string, internal_rate, max_modes=max_modes,
                                            max_frequency=max_mode_frequency)
         self.rng = rng
-        self.state = np.zeros((2, self.basis.n_modes))
+        self.state = aligned_zeros((2, padded_modes(self.basis.n_modes)))
         self.last_forces = np.zeros(2)
         self.friction = np.array([string.mu_s, string.mu_d, string.v0, friction_noise])
         self.finger_spring = np.array([string.finger_stiffness, string.finger_damping])
@@ -109,9 +116,8 @@ class StringVoice:
             return
         self.excited = True
         packed, gains, fingered = self.coefficients(beta, finger_ratio)
-        noise = self.rng.random(bow_velocity.size)
         advance_string(self.state, self.last_forces, packed, gains, self.finger_spring,
-                       self.friction, fingered, bow_velocity, bow_force, contact_mode, noise,
+                       self.friction, fingered, bow_velocity, bow_force, contact_mode, self.rng,
                        out.bridge_force, out.slip_velocity, out.contact)
         if not contact_mode[-1] and np.abs(self.state[0]).max() < SILENT_AMPLITUDE:
             self.reset()  # rung out: stop simulating until touched again

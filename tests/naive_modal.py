@@ -10,8 +10,11 @@ import numpy as np
 
 
 def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocity, bow_force,
-                 contact_mode, noise):
-    """Return (bridge force, slip velocity, contact) per sample, like the kernel."""
+                 contact_mode, rng):
+    """Return (bridge force, slip velocity, contact) per sample, like the kernel.
+
+    ``rng`` gives one uniform draw of friction noise per slipping sample, in order.
+    """
     length = basis.string.length
     effective = length * (1.0 - finger_ratio)
     phi_b = basis.shape(beta * effective)
@@ -58,7 +61,7 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
             if contact_mode[t] == 2 or abs(f_stick) <= mu_s * bow_force[t]:
                 f_bow, state = f_stick, 1
             else:
-                v0 = v0_nominal * (1.0 - depth * noise[t])
+                v0 = v0_nominal * (1.0 - depth * rng.random())
                 fb = bow_force[t]
                 # Solve u = |dv| - A F_b mu(u) for the slip speed by bisection.
                 lo, hi = 0.0, abs(dv)
