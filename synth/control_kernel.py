@@ -55,3 +55,20 @@ def sample_bowing(frame_time, frame_velocity, frame_force, first_sample, sample_
         out_velocity[k] = frame_velocity[n_frames - 1]
         out_force[k] = frame_force[n_frames - 1]
         out_mode[k] = MODE_LIFTED
+
+
+@njit(cache=True, error_model="numpy")
+def ramp_bowing(start_velocity, end_velocity, start_force, end_force, lifted,
+                out_velocity, out_force, out_mode):  # pragma: no cover - numba
+    """Ramp velocity (m/s) and force (N) linearly over a block, reaching the end values.
+
+    Sample i of n takes the fraction (i + 1) / n of the way. The mode is MODE_LIFTED
+    everywhere when ``lifted``, else MODE_BOW wherever the force is positive.
+    """
+    n = out_velocity.size
+    for i in range(n):
+        w = (i + 1) / n
+        force = start_force + (end_force - start_force) * w
+        out_velocity[i] = start_velocity + (end_velocity - start_velocity) * w
+        out_force[i] = force
+        out_mode[i] = MODE_LIFTED if lifted or force <= 0.0 else MODE_BOW

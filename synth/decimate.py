@@ -53,15 +53,27 @@ def anti_alias_taps(sample_rate: int, factor: int) -> np.ndarray:
 
 
 @njit(cache=True, fastmath={"reassoc", "contract", "nsz", "arcp"}, error_model="numpy")
-def _accumulate_phase(phase, taps, shift, out):  # pragma: no cover - numba
-    """out[k] += sum_q taps[q] phase[k + shift + q]: one polyphase branch (a dot per output)."""
-    # Index with loop counters only (no signed offsets) so that LLVM vectorises the dot.
-    segment = phase[shift:]
-    for k in range(out.size):
-        acc = 0.0
-        for q in range(taps.size):
-            acc += taps[q] * segment[k + q]
-        out[k] += acc
+def _polyphase_decimate(extended, factor, phases, shifts, starts, taps, scratch,
+                        out):  # pragma: no cover - numba
+    """out[k] = sum over branches b of sum_q taps_b[q] x_b[k + shifts[b] + q].
+
+    x_b is phase ``phases[b]`` of ``extended`` (every ``factor``-th sample), copied into
+    ``scratch`` so that each dot reads contiguous memory; taps_b = taps[starts[b]:starts[b+1]].
+    """
+    n_frames = extended.size // factor
+    out[:] = 0.0
+    for b in range(phases.size):
+        phase = phases[b]
+        for i in range(n_frames):
+            scratch[i] = extended[i * factor + phase]
+        # Index with loop counters only (no signed offsets) so that LLVM vectorises the dot.
+        segment = scratch[shifts[b]:n_frames]
+        branch = taps[starts[b]:starts[b + 1]]
+        for k in range(out.size):
+            acc = 0.0
+            for q in range(branch.size):
+                acc += branch[q] * segment[k + q]
+            out[k] += acc
 
 
 class Decimator:
@@ -70,7 +82,8 @@ class Decimator:
     Output sample k of a block is the filtered internal sample ``k * factor + factor - 1``.
     The filter runs in polyphase form: the input is split into its ``factor`` phases and
     each phase meets only its own (non-zero) taps, so a half-band filter costs half its
-    length and every inner loop reads contiguous memory.
+    length and every inner loop reads contiguous memory. Working buffers are kept between
+    blocks, so a stream of small blocks (the listening loop's hops) allocates little.
     """
 
     def __init__(self, sample_rate: int, factor: int) -> None:
@@ -79,7 +92,13 @@ class Decimator:
         # History long enough for the filter, rounded up to whole frames of `factor`.
         memory = self.taps.size - 1
         self._history = np.zeros(memory + (-memory) % self.factor)
-        self._branches = self._polyphase_branches(self._history.size - memory)
+        branches = self._polyphase_branches(self._history.size - memory)
+        self._phases = np.array([b[0] for b in branches], np.int64)
+        self._shifts = np.array([b[2] for b in branches], np.int64)
+        self._starts = np.cumsum([0] + [b[1].size for b in branches]).astype(np.int64)
+        self._branch_taps = np.concatenate([b[1] for b in branches])
+        self._extended = np.zeros(0)
+        self._scratch = np.zeros(0)
 
     def _polyphase_branches(self, pad: int) -> list[tuple[int, np.ndarray, int]]:
         """(phase, taps, shift) per phase holding non-zero taps.
@@ -118,10 +137,16 @@ class Decimator:
         """
         if self.factor == 1:
             return block.copy()
-        extended = np.concatenate([self._history, block])
-        phases = extended.reshape(-1, self.factor).T
-        out = np.zeros(block.size // self.factor)
-        for phase, taps, shift in self._branches:
-            _accumulate_phase(np.ascontiguousarray(phases[phase]), taps, shift, out)
-        self._history = extended[extended.size - self._history.size:]
+        memory = self._history.size
+        size = memory + block.size
+        if self._extended.size != size:
+            self._extended = np.empty(size)
+            self._scratch = np.empty(size // self.factor)
+        extended = self._extended
+        extended[:memory] = self._history
+        extended[memory:] = block
+        out = np.empty(block.size // self.factor)
+        _polyphase_decimate(extended, self.factor, self._phases, self._shifts, self._starts,
+                            self._branch_taps, self._scratch, out)
+        self._history[:] = extended[size - memory:]
         return out

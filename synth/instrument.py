@@ -24,9 +24,10 @@ import numpy as np
 from data_schemas.actions import ACTIONS
 from data_schemas.errors import ParameterError
 from synth.body import BlockConvolver, load_body_ir, synthesize_body_ir
+from synth.control_kernel import ramp_bowing
 from synth.decimate import Decimator
 from synth.diagnostics import ContactDiagnostics, OnsetTracker, merge_diagnostics
-from synth.modal_kernel import MODE_BOW, MODE_GRIP, MODE_LIFTED
+from synth.modal_kernel import MODE_GRIP, MODE_LIFTED
 from synth.strings import InstrumentConstants, load_instrument
 from synth.voice import StringOutput, StringVoice
 
@@ -75,7 +76,8 @@ class StringInput:
     bow_velocity, bow_force : np.ndarray [shape=(n_internal,)], m/s and N
     contact_mode : np.ndarray [shape=(n_internal,)], int8
     beta, finger_ratio : np.ndarray [shape=(n_sub_blocks,)]
-        One value per :data:`SUB_BLOCK` output samples.
+        One value per :data:`SUB_BLOCK` output samples (a single value when
+        ``steady_contact``).
     pluck_offsets : sequence of int
         Internal-sample offsets in this run where plucks start.
     pluck_pulls : sequence of float, m
@@ -196,7 +198,7 @@ class Instrument:
         self._sample = 0
         self._grip_until = [0] * self.n_strings
         self._held = [BowControl(0.0, 0.0, 0.1, 0.0) for _ in self.voices]
-        self._ramps: dict[int, np.ndarray] = {}
+        self._outputs: dict[int, StringOutput] = {}
 
     def _body(self, body: BodySpec, seed: int) -> np.ndarray | None:
         if body is None:
@@ -211,7 +213,7 @@ class Instrument:
     # -- block API ---------------------------------------------------------------------
 
     def process(self, n_samples: int, controls: Mapping[int, BowControl | None] | None = None,
-                *, plucks: Iterable[int] = ()) -> Block:
+                *, plucks: Iterable[int] = (), diagnostics: bool = True) -> Block:
         """Advance by ``n_samples`` output samples.
 
         Bow velocity and force ramp linearly from the previous block's values to the given
@@ -227,6 +229,9 @@ class Instrument:
             String index (0 = lowest) to its bowing at the end of the block.
         plucks : iterable of int
             Strings plucked at the start of this block.
+        diagnostics : bool
+            Compute the contact diagnostics (False leaves ``Block.diagnostics`` empty and
+            saves their cost when nobody reads them).
 
         Returns
         -------
@@ -238,34 +243,21 @@ class Instrument:
         plucked = set(plucks)
         inputs = {}
         n_internal = n_samples * self.oversample
-        n_sub = -(-n_samples // SUB_BLOCK)
         for s in set(controls) | plucked:
             self._check_string(s)
             new = controls.get(s)
             old = self._held[s]
             target = new or BowControl(0.0, 0.0, old.beta, old.finger_ratio)
             _check_control(target, s)
-            ramp = self._ramp(n_internal)
-            velocity = old.bow_velocity + (target.bow_velocity - old.bow_velocity) * ramp
-            force = old.bow_force + (target.bow_force - old.bow_force) * ramp
-            if new is None or max(old.bow_force, target.bow_force) <= 0.0:
-                mode = np.zeros(n_internal, np.int8)
-            elif min(old.bow_force, target.bow_force) > 0.0:
-                mode = np.ones(n_internal, np.int8)
-            else:
-                mode = np.where(force > 0.0, MODE_BOW, MODE_LIFTED).astype(np.int8)
-            inputs[s] = StringInput(velocity, force, mode, np.full(n_sub, target.beta),
-                                    np.full(n_sub, target.finger_ratio),
+            velocity, force = np.empty(n_internal), np.empty(n_internal)
+            mode = np.empty(n_internal, np.int8)
+            ramp_bowing(old.bow_velocity, target.bow_velocity, old.bow_force, target.bow_force,
+                        new is None, velocity, force, mode)
+            inputs[s] = StringInput(velocity, force, mode, np.array((target.beta,)),
+                                    np.array((target.finger_ratio,)),
                                     (0,) if s in plucked else (), steady_contact=True)
             self._held[s] = target
-        return self._run(n_samples, inputs)
-
-    def _ramp(self, n: int) -> np.ndarray:
-        """(1..n) / n: the linear ramp of a block's controls (cached per size)."""
-        ramp = self._ramps.get(n)
-        if ramp is None:
-            ramp = self._ramps[n] = np.arange(1, n + 1) / n
-        return ramp
+        return self._run(n_samples, inputs, track=diagnostics)
 
     def _check_string(self, s: int) -> None:
         if not 0 <= s < self.n_strings:
@@ -283,8 +275,7 @@ class Instrument:
         """
         n_internal = n_samples * self.oversample
         total = np.zeros(n_internal)
-        out = StringOutput(np.empty(n_internal), np.empty(n_internal),
-                           np.empty(n_internal, np.int8))
+        out = self._scratch_output(n_internal)
         diagnostics, per_hop = {}, {}
         start = self._sample * self.oversample
         for s, voice in enumerate(self.voices):
@@ -310,6 +301,16 @@ class Instrument:
         self._sample += n_samples
         return Block((OUTPUT_GAIN * audio).astype(np.float32), bridge, diagnostics, per_hop)
 
+    def _scratch_output(self, n_internal: int) -> StringOutput:
+        """Per-string output arrays of ``n_internal`` samples, reused from run to run."""
+        out = self._outputs.get(n_internal)
+        if out is None:
+            if len(self._outputs) > 4:
+                self._outputs.clear()
+            out = self._outputs[n_internal] = StringOutput(
+                np.empty(n_internal), np.empty(n_internal), np.empty(n_internal, np.int8))
+        return out
+
     def _track_hops(self, s: int, out: StringOutput, start: int,
                     hop: int) -> list[ContactDiagnostics]:
         tracker = self._trackers[s]
@@ -318,12 +319,9 @@ class Instrument:
 
     def _lifted(self, s: int, n_samples: int) -> StringInput:
         held = self._held[s]
-        n_internal = n_samples * self.oversample
-        n_sub = -(-n_samples // SUB_BLOCK)
-        zeros = np.zeros(n_internal)
-        return StringInput(zeros, zeros, np.zeros(n_internal, np.int8),
-                           np.full(n_sub, held.beta), np.full(n_sub, held.finger_ratio),
-                           steady_contact=True)
+        zeros = np.zeros(n_samples * self.oversample)
+        return StringInput(zeros, zeros, np.zeros(zeros.size, np.int8), np.array((held.beta,)),
+                           np.array((held.finger_ratio,)), steady_contact=True)
 
     def _apply_plucks(self, s: int, given: StringInput, start: int) -> None:
         """Turn pluck starts and a pluck still pulling into grip samples."""

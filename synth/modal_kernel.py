@@ -28,7 +28,7 @@ _FAST = {"reassoc", "contract", "nsz", "arcp"}
 
 @njit(cache=True, fastmath=_FAST, error_model="numpy")
 def advance_string(modal_state, last_forces, coefficients, gains, finger_spring, friction,
-                   fingered, bow_velocity, bow_force, contact_mode, rng,
+                   fingered, bow_velocity, bow_force, contact_mode, noise, noise_used,
                    out_bridge, out_slip_velocity, out_contact):  # pragma: no cover - numba
     """Advance one string by ``bow_velocity.size`` samples; see :mod:`synth.modal`.
 
@@ -39,8 +39,9 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     ``gains`` = (H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge per bow force, bridge per finger
     force), ``friction`` = (mu_s, mu_d, v0 m/s, noise depth), ``finger_spring`` = (K N/m,
     R N s/m). Writes bridge force (N), slip velocity (m/s) and contact state per sample.
-    ``rng`` (numpy.random.Generator) gives the friction noise: one uniform draw per slipping
-    sample, in sample order, so a seed fixes the sound.
+    ``noise`` holds uniform draws of friction noise, consumed one per slipping sample in
+    sample order from ``noise_used[0]`` on (updated in place; the caller keeps at least
+    ``bow_velocity.size`` unused), so a seed fixes the sound.
     """
     modal_a = modal_state[0]
     modal_v = modal_state[1]
@@ -59,6 +60,7 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     q = -(stiffness * g_fb + damping * h_fb) * finger_gain if fingered else 0.0
     admittance = h_bb + h_bf * q
     inverse_admittance = 1.0 / admittance
+    next_noise = noise_used[0]
     for t in range(bow_velocity.size):
         v_bow_point = 0.0
         bridge = 0.0
@@ -103,7 +105,8 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
                 out_contact[t] = CONTACT_STICK
             else:
                 # Hyperbolic friction, solved in closed form for the slip speed.
-                v0 = v0_nominal * (1.0 - noise_depth * rng.random())
+                v0 = v0_nominal * (1.0 - noise_depth * noise[next_noise])
+                next_noise += 1
                 d = abs(dv)
                 b = v0 - d + admittance * normal * mu_d
                 c = -v0 * (d - admittance * normal * mu_s)
@@ -116,6 +119,7 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
         out_slip_velocity[t] = slip
     last_forces[0] = f_bow
     last_forces[1] = f_finger
+    noise_used[0] = next_noise
 
 
 def empty_outputs(n_samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -21,6 +21,8 @@ from synth.strings import StringConstants
 BETA_RESOLUTION = 1e-4
 FINGER_RESOLUTION = 1e-5
 _CACHE_SIZE = 256
+#: Friction-noise draws taken from the generator at a time.
+NOISE_BLOCK = 1 << 16
 #: A released string whose modal displacements all fall below this (m) has rung out
 #: (about 160 dB below playing level) and is no longer simulated.
 SILENT_AMPLITUDE = 1e-12
@@ -73,6 +75,8 @@ class StringVoice:
         self.friction = np.array([string.mu_s, string.mu_d, string.v0, friction_noise])
         self.finger_spring = np.array([string.finger_stiffness, string.finger_damping])
         self._cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, bool]] = {}
+        self._noise = np.zeros(0)
+        self._noise_used = np.zeros(1, np.int64)
         self.excited = False
 
     def reset(self) -> None:
@@ -93,6 +97,19 @@ class StringVoice:
             hit = (pack_coefficients(self.basis, contact), contact.gains, contact.fingered)
             self._cache[key] = hit
         return hit
+
+    def _reserve_noise(self, n: int) -> None:
+        """Keep at least ``n`` unused friction-noise draws (one per slipping sample).
+
+        Draws come from ``rng`` in blocks but are used in stream order, so the sound does
+        not depend on how a run is split into calls.
+        """
+        used = int(self._noise_used[0])
+        if self._noise.size - used >= n:
+            return
+        fresh = self.rng.random(max(NOISE_BLOCK, n))
+        self._noise = np.concatenate([self._noise[used:], fresh])
+        self._noise_used[0] = 0
 
     def advance(self, bow_velocity: np.ndarray, bow_force: np.ndarray, contact_mode: np.ndarray,
                 beta: float, finger_ratio: float, out: StringOutput) -> None:
@@ -116,8 +133,10 @@ class StringVoice:
             return
         self.excited = True
         packed, gains, fingered = self.coefficients(beta, finger_ratio)
+        self._reserve_noise(bow_velocity.size)
         advance_string(self.state, self.last_forces, packed, gains, self.finger_spring,
-                       self.friction, fingered, bow_velocity, bow_force, contact_mode, self.rng,
-                       out.bridge_force, out.slip_velocity, out.contact)
+                       self.friction, fingered, bow_velocity, bow_force, contact_mode,
+                       self._noise, self._noise_used, out.bridge_force, out.slip_velocity,
+                       out.contact)
         if not contact_mode[-1] and np.abs(self.state[0]).max() < SILENT_AMPLITUDE:
             self.reset()  # rung out: stop simulating until touched again

@@ -1,6 +1,7 @@
 """Control frames -> per-sample controls: the one-pass kernel equals numpy.interp."""
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -33,3 +34,20 @@ def test_sample_bowing_equals_numpy_interp(seed, n_frames, first_sample, n, step
     np.testing.assert_allclose(out_v[ok], np.interp(t, frame_time, velocity)[ok], atol=1e-9)
     np.testing.assert_allclose(out_f[ok], expected_force[ok], atol=1e-9)
     np.testing.assert_array_equal(out_m[ok], expected_mode[ok])
+
+
+@settings(max_examples=100, deadline=None)
+@given(v=st.tuples(st.floats(-2, 2), st.floats(-2, 2)),
+       f=st.tuples(st.floats(0, 5), st.floats(0, 5)),
+       n=st.integers(1, 1024), lifted=st.booleans())
+def test_ramp_bowing_reaches_the_end_values(v, f, n, lifted):
+    from synth.control_kernel import ramp_bowing
+
+    out_v, out_f, out_m = np.empty(n), np.empty(n), np.empty(n, np.int8)
+    ramp_bowing(v[0], v[1], f[0], f[1], lifted, out_v, out_f, out_m)
+    w = np.arange(1, n + 1) / n
+    np.testing.assert_allclose(out_v, v[0] + (v[1] - v[0]) * w, atol=1e-12)
+    np.testing.assert_allclose(out_f, f[0] + (f[1] - f[0]) * w, atol=1e-12)
+    assert out_f[-1] == pytest.approx(f[1])
+    expected = np.where(~lifted & (out_f > 0.0), MODE_BOW, MODE_LIFTED)
+    np.testing.assert_array_equal(out_m, expected)

@@ -20,7 +20,8 @@ def run_kernel(basis, string, beta, finger_ratio, velocity, force, mode, rng):
     friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
     spring = np.array([string.finger_stiffness, string.finger_damping])
     advance_string(state, forces, packed, contact.gains, spring, friction, contact.fingered,
-                   velocity, force, mode, rng, *out)
+                   velocity, force, mode, rng.random(velocity.size), np.zeros(1, np.int64),
+                   *out)
     return out
 
 
@@ -71,11 +72,11 @@ def test_kernel_split_into_odd_runs_equals_one_run(finger_ratio):
 
     def run(bounds):
         state, forces, out = np.zeros((2, basis.n_modes)), np.zeros(2), empty_outputs(N)
-        rng = np.random.default_rng(5)
+        noise, used = np.random.default_rng(5).random(N), np.zeros(1, np.int64)
         for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
             advance_string(state, forces, packed, contact.gains, spring, friction,
                            contact.fingered, velocity[lo:hi], force[lo:hi], mode[lo:hi],
-                           rng, out[0][lo:hi], out[1][lo:hi], out[2][lo:hi])
+                           noise, used, out[0][lo:hi], out[1][lo:hi], out[2][lo:hi])
         return out
 
     whole = run([0, N])
