@@ -107,7 +107,7 @@ class StringVoice:
         used = int(self._noise_used[0])
         if self._noise.size - used >= n:
             return
-        fresh = self.rng.random(max(NOISE_BLOCK, n))
+        fresh = self.rng.random(max(NOISE_BLOCK, n - (self._noise.size - used)))
         self._noise = np.concatenate([self._noise[used:], fresh])
         self._noise_used[0] = 0
 

@@ -84,3 +84,25 @@ def test_kernel_split_into_odd_runs_equals_one_run(finger_ratio):
     np.testing.assert_array_equal(whole[2], pieces[2])
     np.testing.assert_allclose(pieces[0], whole[0], rtol=0,
                                atol=1e-12 * np.abs(whole[0]).max())
+
+
+def test_voice_output_does_not_depend_on_how_a_run_is_split():
+    """The friction noise is drawn in blocks but used in stream order."""
+    from synth.voice import StringOutput, StringVoice
+
+    string = load_instrument("violin").strings[1]
+    n = 150_000  # longer than one block of noise draws
+    velocity, force = np.full(n, 0.3), np.full(n, string.reference_force)
+    mode = np.ones(n, np.int8)
+
+    def run(bounds):
+        voice = StringVoice(string, 88200.0, np.random.default_rng(9),
+                            max_mode_frequency=20000.0)
+        out = StringOutput(np.empty(n), np.empty(n), np.empty(n, np.int8))
+        for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+            voice.advance(velocity[lo:hi], force[lo:hi], mode[lo:hi], 0.1, 0.0,
+                          StringOutput(out.bridge_force[lo:hi], out.slip_velocity[lo:hi],
+                                       out.contact[lo:hi]))
+        return out.bridge_force
+
+    np.testing.assert_array_equal(run([0, n]), run([0, 513, 70_001, 70_002, n]))
