@@ -274,7 +274,7 @@ class Instrument:
         ``track=False`` none are computed (a plain render).
         """
         n_internal = n_samples * self.oversample
-        total = np.zeros(n_internal)
+        total = None  # the first string writes the sum directly, later ones add to it
         out = self._scratch_output(n_internal)
         diagnostics, per_hop = {}, {}
         start = self._sample * self.oversample
@@ -284,8 +284,13 @@ class Instrument:
                 continue
             given = given or self._lifted(s, n_samples)
             self._apply_plucks(s, given, start)
-            self._advance_runs(voice, given, out)
-            total += out.bridge_force
+            if total is None:
+                total = np.empty(n_internal)
+                self._advance_runs(voice, given, StringOutput(total, out.slip_velocity,
+                                                              out.contact))
+            else:
+                self._advance_runs(voice, given, out)
+                total += out.bridge_force
             held = self._held[s]
             self._held[s] = BowControl(held.bow_velocity, held.bow_force,
                                        float(given.beta[-1]), float(given.finger_ratio[-1]))
@@ -296,7 +301,7 @@ class Instrument:
                 diagnostics[s] = merge_diagnostics(per_hop[s])
             else:
                 diagnostics[s] = self._trackers[s].update(out.contact, out.slip_velocity, start)
-        bridge = self._decimator.process(total)
+        bridge = self._decimator.process(np.zeros(n_internal) if total is None else total)
         audio = self._convolver.process(bridge) if self._convolver is not None else bridge
         self._sample += n_samples
         return Block((OUTPUT_GAIN * audio).astype(np.float32), bridge, diagnostics, per_hop)
