@@ -29,7 +29,14 @@ import numpy as np
 
 from synth.instrument import Instrument
 from synth.listening.classifier import FINGERS, PairModel, fit_pair
-from synth.listening.clips import MAX_ACCELERATION, Clip, ClipSpec, auto_label, render_clip
+from synth.listening.clips import (
+    MAX_ACCELERATION,
+    Clip,
+    ClipSpec,
+    auto_label,
+    render_clip,
+    training_body,
+)
 from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog, perform
 from synth.listening.features import HOP, batch_features, yin_window_for
 
@@ -50,6 +57,8 @@ class TrainingSettings:
     min_force: float = 0.002
     max_force: float = 50.0
     band_clips: int = 2
+    grid_step: float = 0.25
+    body_seed: int = 0
     k_candidates: tuple[float, ...] = (1.005, 1.01, 1.02, 1.035, 1.05, 1.1)
     k_repeats: int = 3
     k_note: float = 0.6
@@ -82,7 +91,7 @@ def _play(spec: ClipSpec, settings: TrainingSettings, seed: int, teacher: Teache
     sr = 44100
     context = yin_window_for(spec.nominal_frequency(), sr) / sr
     clip = render_clip(spec, settle=settings.settle, record=settings.record, seed=seed,
-                       context=context)
+                       context=context, body_seed=settings.body_seed)
     return JudgedClip(clip, int(teacher(clip)))
 
 
@@ -118,7 +127,7 @@ def basic_training(instrument: str, string: int, dynamic: str, *,
         def play(force: float, semis: float = semis, i: int = i,
                  judged: list[JudgedClip] = judged) -> int:
             spec = ClipSpec(instrument, string, semis, float(force), v, beta)
-            j = _play(spec, settings, seed * 1000 + i * 100 + len(judged), teacher)
+            j = _play(spec, settings, seed * 100000 + i * 1000 + len(judged), teacher)
             judged.append(j)
             return j.label
 
@@ -137,6 +146,8 @@ def basic_training(instrument: str, string: int, dynamic: str, *,
             band = _band_force(judged)
             if band is not None:
                 play(band)
+        for f in _grid_forces(judged, settings.grid_step, settings.start_force):
+            play(f)
         _relabel_force_side(judged)
         out.extend(judged)
     return out
@@ -159,6 +170,23 @@ def _missing_gap(judged: list[JudgedClip]) -> float | None:
             continue
         return float(np.sqrt(lo * hi))
     return None
+
+
+def _grid_forces(judged: list[JudgedClip], step: float, anchor: float) -> list[float]:
+    """Forces (N) of a log grid between the lowest and highest judged force.
+
+    The grid has ``step`` octaves between forces and passes through ``anchor``; forces within
+    a third of a step of a judged force are left out.
+    """
+    if step <= 0 or len(judged) < 2:
+        return []
+    have = np.log2([j.force for j in judged])
+    lo, hi = have.min(), have.max()
+    base = np.log2(anchor)
+    ks = np.arange(np.ceil((lo - base) / step), np.floor((hi - base) / step) + 1)
+    grid = base + ks * step
+    far = np.min(np.abs(grid[:, None] - have[None, :]), axis=1) > step / 3.0
+    return [float(2.0**g) for g in grid[far]]
 
 
 def _band_force(judged: list[JudgedClip]) -> float | None:
@@ -282,7 +310,9 @@ def _play_note(model: PairModel, semitones: float, *, force: float, K: float,
     plan = note_plan(semitones, f0, velocity=v, beta=beta, duration=duration,
                      dynamic=model.dynamic, string=model.string,
                      n_strings=len(inst_c.strings))
-    inst = Instrument(model.instrument, seed=seed)
+    # Practice notes are played on the clips' violin (the training body), noise seeded anew.
+    inst = Instrument(model.instrument, seed=seed,
+                      body=training_body(model.instrument, 44100, settings.body_seed))
     log = perform(plan, {(model.string, model.dynamic): model}, inst,
                   rng=np.random.default_rng(seed), settings=settings.controller, K=K,
                   initial_force=force, record_diagnostics=record_diagnostics)
