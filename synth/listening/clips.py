@@ -20,6 +20,7 @@ from functools import lru_cache
 import numpy as np
 
 from synth.instrument import BowControl, Instrument
+from synth.listening.features import HOP, WINDOW
 from synth.listening.teacher import (
     TeacherThresholds,
     clip_statistics,
@@ -70,6 +71,8 @@ class Clip:
     onset_times : np.ndarray [shape=(k,)], s
         Slip onsets during the recorded part.
     sample_rate : int, Hz
+    start_time : float, s
+        Time of the recorded part's first sample on the clock of ``onset_times``.
     """
 
     spec: ClipSpec
@@ -77,6 +80,7 @@ class Clip:
     bridge_force: np.ndarray
     onset_times: np.ndarray
     sample_rate: int
+    start_time: float = 0.0
 
     @property
     def duration(self) -> float:
@@ -132,7 +136,8 @@ def render_clip(spec: ClipSpec, *, settle: float = 0.7, record: float = 0.3, see
     audio = block.audio
     if n_context:
         audio = np.concatenate([pre.audio[-n_context:], audio])
-    return Clip(spec, audio, block.bridge_force, onsets, sample_rate)
+    return Clip(spec, audio, block.bridge_force, onsets, sample_rate,
+                start_time=(ramp + n_settle) / sample_rate)
 
 
 @lru_cache(maxsize=16)
@@ -162,3 +167,53 @@ def auto_label(clip: Clip, *, thresholds: TeacherThresholds | None = None) -> in
     string_ref = load_instrument(spec.instrument).strings[spec.string].reference_force
     ratio = spec.bow_force / reference_force(string_ref, spec.bow_velocity, spec.beta)
     return judge(stats, force_ratio=ratio, thresholds=thresholds)
+
+
+def recorded_frame_ends(clip: Clip) -> np.ndarray:
+    """End sample (index into ``clip.audio``) of every feature frame of the recorded part.
+
+    Frame ``k`` of ``clip.audio`` ends at ``k * HOP + WINDOW``; the recorded frames are those
+    ending at least one hop into the recorded part.
+    """
+    n = clip.audio.size
+    if n < WINDOW:
+        return np.zeros(0, np.int64)
+    ends = np.arange((n - WINDOW) // HOP + 1) * HOP + WINDOW
+    return ends[ends >= n - clip.bridge_force.size + HOP]
+
+
+def auto_hop_labels(clip: Clip, *, window_hops: int = 8,
+                    thresholds: TeacherThresholds | None = None) -> np.ndarray:
+    """The automatic teacher's class (1..5) of every recorded frame of a clip.
+
+    Each frame is judged like a clip (:func:`auto_label`) on the ``window_hops * HOP``
+    recorded samples ending with the frame (the first frames, with less recorded sound
+    before them, on the window starting with the recording), so a clip whose regime is not
+    uniform (slipping that comes and goes, a level near the silence threshold) gets each
+    stretch's class instead of one label for all its hops.
+
+    Returns
+    -------
+    np.ndarray [shape=(len(recorded_frame_ends(clip)),)], int
+    """
+    spec = clip.spec
+    sr = clip.sample_rate
+    n_rec = clip.bridge_force.size
+    audio = clip.audio[-n_rec:]
+    start = clip.audio.size - n_rec
+    f0 = spec.nominal_frequency()
+    ref_rms = reference_rms(spec.instrument, sr)
+    string_ref = load_instrument(spec.instrument).strings[spec.string].reference_force
+    ratio = spec.bow_force / reference_force(string_ref, spec.bow_velocity, spec.beta)
+    width = min(window_hops * HOP, n_rec)
+    out = []
+    for end in recorded_frame_ends(clip):
+        b = min(int(end) - start, n_rec)
+        a = max(b - width, 0)
+        b = a + width
+        t = clip.onset_times - clip.start_time
+        onsets = clip.onset_times[(t >= a / sr) & (t < b / sr)]
+        stats = clip_statistics(onsets, clip.bridge_force[a:b], audio[a:b], f0=f0,
+                                duration=(b - a) / sr, sample_rate=sr, reference_rms=ref_rms)
+        out.append(judge(stats, force_ratio=ratio, thresholds=thresholds))
+    return np.asarray(out, np.int64)

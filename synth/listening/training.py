@@ -33,12 +33,14 @@ from synth.listening.clips import (
     MAX_ACCELERATION,
     Clip,
     ClipSpec,
+    auto_hop_labels,
     auto_label,
+    recorded_frame_ends,
     render_clip,
     training_body,
 )
 from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog, perform
-from synth.listening.features import HOP, batch_features, yin_window_for
+from synth.listening.features import HOP, WINDOW, batch_features, yin_window_for
 
 #: Vivi's bow lanes: dynamic -> (bow velocity m/s, beta).
 DEFAULT_LANES = {"p": (0.20, 0.14), "mp": (0.26, 0.12), "mf": (0.33, 0.10), "f": (0.40, 0.08)}
@@ -59,6 +61,7 @@ class TrainingSettings:
     band_clips: int = 2
     grid_step: float = 0.25
     body_seed: int = 0
+    hop_window: int = 8
     k_candidates: tuple[float, ...] = (1.005, 1.01, 1.02, 1.035, 1.05, 1.1)
     k_repeats: int = 3
     k_note: float = 0.6
@@ -76,10 +79,16 @@ QUICK = TrainingSettings(settle=0.6, record=0.3, band_clips=1,
 
 @dataclass
 class JudgedClip:
-    """A clip with its class."""
+    """A clip with its class.
+
+    ``hop_labels``, when known, is the teacher's class of each recorded frame
+    (:func:`synth.listening.clips.auto_hop_labels`); the classifier learns those instead of
+    ``label`` for every frame. A judge who changes ``label`` must clear them.
+    """
 
     clip: Clip
     label: int
+    hop_labels: np.ndarray | None = None
 
     @property
     def force(self) -> float:
@@ -92,7 +101,9 @@ def _play(spec: ClipSpec, settings: TrainingSettings, seed: int, teacher: Teache
     context = yin_window_for(spec.nominal_frequency(), sr) / sr
     clip = render_clip(spec, settle=settings.settle, record=settings.record, seed=seed,
                        context=context, body_seed=settings.body_seed)
-    return JudgedClip(clip, int(teacher(clip)))
+    hops = auto_hop_labels(clip, window_hops=settings.hop_window) if (
+        teacher is auto_label and settings.hop_window > 0) else None
+    return JudgedClip(clip, int(teacher(clip)), hops)
 
 
 def basic_training(instrument: str, string: int, dynamic: str, *,
@@ -204,7 +215,7 @@ def _relabel_force_side(judged: list[JudgedClip]) -> None:
 
     The teacher's 2 (multiple slipping) heard at a force above the centre of the class-3
     clips is relabelled 4, and a 4 below it 2 (a human judging a force sweep hears which side
-    of the good sound a clip lies on).
+    of the good sound a clip lies on). Hop labels follow the same rule.
     """
     good = [j.force for j in judged if j.label == 3]
     if not good:
@@ -215,6 +226,10 @@ def _relabel_force_side(judged: list[JudgedClip]) -> None:
             j.label = 4
         elif j.label == 4 and j.force < centre:
             j.label = 2
+        if j.hop_labels is not None:
+            h = j.hop_labels
+            j.hop_labels = np.where((h == 2) & (j.force > centre), 4,
+                                    np.where((h == 4) & (j.force < centre), 2, h))
 
 
 def clip_features(clips: list[JudgedClip], *,
@@ -225,20 +240,21 @@ def clip_features(clips: list[JudgedClip], *,
     -------
     features : np.ndarray [shape=(n_hops, n_features)]
     labels : np.ndarray [shape=(n_hops,)]
+        The clip's hop labels where it has them, else its label on every hop.
     clip_index : np.ndarray [shape=(n_hops,)]
     """
     feats, labels, index = [], [], []
     for i, j in enumerate(clips):
         f0 = j.clip.spec.nominal_frequency()
         yw = yin_window_for(f0, sample_rate)
-        n_rec = j.clip.bridge_force.size
         f = batch_features(j.clip.audio, f0, sample_rate=sample_rate, yin_window=yw)
-        start = j.clip.audio.size - n_rec
-        ends = np.arange(f.shape[0]) * HOP + 1024
-        keep = ends >= start + HOP
-        feats.append(f[keep])
-        labels.append(np.full(int(keep.sum()), j.label))
-        index.append(np.full(int(keep.sum()), i))
+        ends = recorded_frame_ends(j.clip)
+        f = f[(ends - WINDOW) // HOP]
+        feats.append(f)
+        hops = j.hop_labels
+        labels.append(hops if hops is not None and hops.size == f.shape[0]
+                      else np.full(f.shape[0], j.label))
+        index.append(np.full(f.shape[0], i))
     return np.vstack(feats), np.concatenate(labels), np.concatenate(index)
 
 
@@ -248,6 +264,9 @@ def fit_from_clips(clips: list[JudgedClip], *, instrument: str, string: int, dyn
     X, y, index = clip_features(clips)
     model = fit_pair(X, y, instrument=instrument, string=string, dynamic=dynamic, seed=seed,
                      groups=index)
+    n_hop_labelled = sum(j.hop_labels is not None for j in clips)
+    model.metadata["labels"] = (f"per hop (teacher, {n_hop_labelled} of {len(clips)} clips)"
+                                if n_hop_labelled else "per clip")
     v, beta = lane or DEFAULT_LANES[dynamic]
     audible = [j.force for j in clips if j.label >= 2] or [j.force for j in clips]
     model.metadata.update(
