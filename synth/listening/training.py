@@ -2,10 +2,13 @@
 
 1. :func:`basic_training`: at fingers 0, 4 and 7 semitones, start at 1 N and double until a
    clip is judged 5, go back to 0.5 N and halve until one is judged 1, then fill gaps between
-   judged forces until every class has an example (and a few clips cover the class-3 band).
-2. :func:`fit_from_clips`: features of every recorded hop, labelled with its clip's class,
-   train the pair's scaler + SVC (10-fold CV by clip in the metadata: a clip's hops stay in
-   one fold).
+   judged forces until every class has an example (and a few clips cover the class-3 band),
+   then add clips on a log grid (``grid_step`` octaves) between the lowest and highest judged
+   force. All clips are played on one violin body (``body_seed``); the automatic teacher
+   also judges each recorded hop (``hop_window`` hops of sound ending with it).
+2. :func:`fit_from_clips`: features of every recorded hop, labelled with the teacher's class
+   of that hop (its clip's class for other judges), train the pair's scaler + SVC (10-fold
+   CV by clip in the metadata: a clip's hops stay in one fold).
 3. :func:`search_initial_force` (first, with the smallest K): per finger, practice notes start
    at forces log-spaced over that finger's class-3 band; the teacher judges every sustained
    hop and the cost is sum (3 - c)^2 (the attack's cost plus later errors); median over
@@ -59,7 +62,7 @@ class TrainingSettings:
     min_force: float = 0.002
     max_force: float = 50.0
     band_clips: int = 2
-    grid_step: float = 0.25
+    grid_step: float = 0.125
     body_seed: int = 0
     hop_window: int = 8
     k_candidates: tuple[float, ...] = (1.005, 1.01, 1.02, 1.035, 1.05, 1.1)
