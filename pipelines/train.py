@@ -131,7 +131,9 @@ def train_one(instrument: str, string: int, dynamic: str, out_dir: str, *,
         by_id = dict(zip(merged["clip_id"], merged["label"], strict=True))
         if frame is not None:
             for j, cid in zip(clips, frame["clip_id"], strict=True):
-                j.label = int(by_id.get(cid, j.label))
+                label = int(by_id.get(cid, j.label))
+                if label != j.label:  # a human's judgement replaces the teacher's hop labels
+                    j.label, j.hop_labels = label, None
         known = set(frame["clip_id"]) if frame is not None else set()
         extra = human[~human["clip_id"].isin(known)]
         clips = clips + _human_clips(extra, Path(labels_base))

@@ -147,7 +147,7 @@ def fit_pair(features: np.ndarray, labels: np.ndarray, *, instrument: str, strin
     ----------
     features : np.ndarray [shape=(n_hops, len(FEATURE_NAMES))]
     labels : np.ndarray [shape=(n_hops,)]
-        Class 1..5 of each hop (its clip's label).
+        Class 1..5 of each hop (the teacher's judgement of the hop, or its clip's label).
     instrument, string, dynamic
         The pair.
     folds : int

@@ -2,10 +2,13 @@
 
 1. :func:`basic_training`: at fingers 0, 4 and 7 semitones, start at 1 N and double until a
    clip is judged 5, go back to 0.5 N and halve until one is judged 1, then fill gaps between
-   judged forces until every class has an example (and a few clips cover the class-3 band).
-2. :func:`fit_from_clips`: features of every recorded hop, labelled with its clip's class,
-   train the pair's scaler + SVC (10-fold CV by clip in the metadata: a clip's hops stay in
-   one fold).
+   judged forces until every class has an example (and a few clips cover the class-3 band),
+   then add clips on a log grid (``grid_step`` octaves) between the lowest and highest judged
+   force. All clips are played on one violin body (``body_seed``); the automatic teacher
+   also judges each recorded hop (``hop_window`` hops of sound ending with it).
+2. :func:`fit_from_clips`: features of every recorded hop, labelled with the teacher's class
+   of that hop (its clip's class for other judges), train the pair's scaler + SVC (10-fold
+   CV by clip in the metadata: a clip's hops stay in one fold).
 3. :func:`search_initial_force` (first, with the smallest K): per finger, practice notes start
    at forces log-spaced over that finger's class-3 band; the teacher judges every sustained
    hop and the cost is sum (3 - c)^2 (the attack's cost plus later errors); median over
@@ -29,9 +32,18 @@ import numpy as np
 
 from synth.instrument import Instrument
 from synth.listening.classifier import FINGERS, PairModel, fit_pair
-from synth.listening.clips import MAX_ACCELERATION, Clip, ClipSpec, auto_label, render_clip
+from synth.listening.clips import (
+    MAX_ACCELERATION,
+    Clip,
+    ClipSpec,
+    auto_hop_labels,
+    auto_label,
+    recorded_frame_ends,
+    render_clip,
+    training_body,
+)
 from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog, perform
-from synth.listening.features import HOP, batch_features, yin_window_for
+from synth.listening.features import HOP, WINDOW, batch_features, yin_window_for
 
 #: Vivi's bow lanes: dynamic -> (bow velocity m/s, beta).
 DEFAULT_LANES = {"p": (0.20, 0.14), "mp": (0.26, 0.12), "mf": (0.33, 0.10), "f": (0.40, 0.08)}
@@ -50,6 +62,9 @@ class TrainingSettings:
     min_force: float = 0.002
     max_force: float = 50.0
     band_clips: int = 2
+    grid_step: float = 0.125
+    body_seed: int = 0
+    hop_window: int = 8
     k_candidates: tuple[float, ...] = (1.005, 1.01, 1.02, 1.035, 1.05, 1.1)
     k_repeats: int = 3
     k_note: float = 0.6
@@ -67,10 +82,16 @@ QUICK = TrainingSettings(settle=0.6, record=0.3, band_clips=1,
 
 @dataclass
 class JudgedClip:
-    """A clip with its class."""
+    """A clip with its class.
+
+    ``hop_labels``, when known, is the teacher's class of each recorded frame
+    (:func:`synth.listening.clips.auto_hop_labels`); the classifier learns those instead of
+    ``label`` for every frame. A judge who changes ``label`` must clear them.
+    """
 
     clip: Clip
     label: int
+    hop_labels: np.ndarray | None = None
 
     @property
     def force(self) -> float:
@@ -82,8 +103,10 @@ def _play(spec: ClipSpec, settings: TrainingSettings, seed: int, teacher: Teache
     sr = 44100
     context = yin_window_for(spec.nominal_frequency(), sr) / sr
     clip = render_clip(spec, settle=settings.settle, record=settings.record, seed=seed,
-                       context=context)
-    return JudgedClip(clip, int(teacher(clip)))
+                       context=context, body_seed=settings.body_seed)
+    hops = auto_hop_labels(clip, window_hops=settings.hop_window) if (
+        teacher is auto_label and settings.hop_window > 0) else None
+    return JudgedClip(clip, int(teacher(clip)), hops)
 
 
 def basic_training(instrument: str, string: int, dynamic: str, *,
@@ -118,7 +141,7 @@ def basic_training(instrument: str, string: int, dynamic: str, *,
         def play(force: float, semis: float = semis, i: int = i,
                  judged: list[JudgedClip] = judged) -> int:
             spec = ClipSpec(instrument, string, semis, float(force), v, beta)
-            j = _play(spec, settings, seed * 1000 + i * 100 + len(judged), teacher)
+            j = _play(spec, settings, seed * 100000 + i * 1000 + len(judged), teacher)
             judged.append(j)
             return j.label
 
@@ -137,6 +160,8 @@ def basic_training(instrument: str, string: int, dynamic: str, *,
             band = _band_force(judged)
             if band is not None:
                 play(band)
+        for f in _grid_forces(judged, settings.grid_step, settings.start_force):
+            play(f)
         _relabel_force_side(judged)
         out.extend(judged)
     return out
@@ -161,6 +186,23 @@ def _missing_gap(judged: list[JudgedClip]) -> float | None:
     return None
 
 
+def _grid_forces(judged: list[JudgedClip], step: float, anchor: float) -> list[float]:
+    """Forces (N) of a log grid between the lowest and highest judged force.
+
+    The grid has ``step`` octaves between forces and passes through ``anchor``; forces within
+    a third of a step of a judged force are left out.
+    """
+    if step <= 0 or len(judged) < 2:
+        return []
+    have = np.log2([j.force for j in judged])
+    lo, hi = have.min(), have.max()
+    base = np.log2(anchor)
+    ks = np.arange(np.ceil((lo - base) / step), np.floor((hi - base) / step) + 1)
+    grid = base + ks * step
+    far = np.min(np.abs(grid[:, None] - have[None, :]), axis=1) > step / 3.0
+    return [float(2.0**g) for g in grid[far]]
+
+
 def _band_force(judged: list[JudgedClip]) -> float | None:
     """A force inside the widest gap next to a class-3 clip (more examples near the band)."""
     order = sorted(judged, key=lambda j: j.force)
@@ -176,7 +218,7 @@ def _relabel_force_side(judged: list[JudgedClip]) -> None:
 
     The teacher's 2 (multiple slipping) heard at a force above the centre of the class-3
     clips is relabelled 4, and a 4 below it 2 (a human judging a force sweep hears which side
-    of the good sound a clip lies on).
+    of the good sound a clip lies on). Hop labels follow the same rule.
     """
     good = [j.force for j in judged if j.label == 3]
     if not good:
@@ -187,6 +229,10 @@ def _relabel_force_side(judged: list[JudgedClip]) -> None:
             j.label = 4
         elif j.label == 4 and j.force < centre:
             j.label = 2
+        if j.hop_labels is not None:
+            h = j.hop_labels
+            j.hop_labels = np.where((h == 2) & (j.force > centre), 4,
+                                    np.where((h == 4) & (j.force < centre), 2, h))
 
 
 def clip_features(clips: list[JudgedClip], *,
@@ -197,20 +243,21 @@ def clip_features(clips: list[JudgedClip], *,
     -------
     features : np.ndarray [shape=(n_hops, n_features)]
     labels : np.ndarray [shape=(n_hops,)]
+        The clip's hop labels where it has them, else its label on every hop.
     clip_index : np.ndarray [shape=(n_hops,)]
     """
     feats, labels, index = [], [], []
     for i, j in enumerate(clips):
         f0 = j.clip.spec.nominal_frequency()
         yw = yin_window_for(f0, sample_rate)
-        n_rec = j.clip.bridge_force.size
         f = batch_features(j.clip.audio, f0, sample_rate=sample_rate, yin_window=yw)
-        start = j.clip.audio.size - n_rec
-        ends = np.arange(f.shape[0]) * HOP + 1024
-        keep = ends >= start + HOP
-        feats.append(f[keep])
-        labels.append(np.full(int(keep.sum()), j.label))
-        index.append(np.full(int(keep.sum()), i))
+        ends = recorded_frame_ends(j.clip)
+        f = f[(ends - WINDOW) // HOP]
+        feats.append(f)
+        hops = j.hop_labels
+        labels.append(hops if hops is not None and hops.size == f.shape[0]
+                      else np.full(f.shape[0], j.label))
+        index.append(np.full(f.shape[0], i))
     return np.vstack(feats), np.concatenate(labels), np.concatenate(index)
 
 
@@ -220,6 +267,9 @@ def fit_from_clips(clips: list[JudgedClip], *, instrument: str, string: int, dyn
     X, y, index = clip_features(clips)
     model = fit_pair(X, y, instrument=instrument, string=string, dynamic=dynamic, seed=seed,
                      groups=index)
+    n_hop_labelled = sum(j.hop_labels is not None for j in clips)
+    model.metadata["labels"] = (f"per hop (teacher, {n_hop_labelled} of {len(clips)} clips)"
+                                if n_hop_labelled else "per clip")
     v, beta = lane or DEFAULT_LANES[dynamic]
     audible = [j.force for j in clips if j.label >= 2] or [j.force for j in clips]
     model.metadata.update(
@@ -282,7 +332,9 @@ def _play_note(model: PairModel, semitones: float, *, force: float, K: float,
     plan = note_plan(semitones, f0, velocity=v, beta=beta, duration=duration,
                      dynamic=model.dynamic, string=model.string,
                      n_strings=len(inst_c.strings))
-    inst = Instrument(model.instrument, seed=seed)
+    # Practice notes are played on the clips' violin (the training body), noise seeded anew.
+    inst = Instrument(model.instrument, seed=seed,
+                      body=training_body(model.instrument, 44100, settings.body_seed))
     log = perform(plan, {(model.string, model.dynamic): model}, inst,
                   rng=np.random.default_rng(seed), settings=settings.controller, K=K,
                   initial_force=force, record_diagnostics=record_diagnostics)
