@@ -129,9 +129,13 @@ class Instrument:
     oversample : {1, 2, 4}, optional
         Internal rate = ``oversample * sample_rate`` (default :data:`DEFAULT_OVERSAMPLE`).
     seed : int
-        Seed of the friction noise and of the synthesized body.
+        Seed of the friction noise (the performance).
     body : {"synthesized"} or path-like or np.ndarray or None
         Body impulse response: synthesized, loaded from a WAV, given, or none.
+    body_seed : int
+        Which synthesized body (its dense modes above 600 Hz are random): an instrument
+        keeps its body whatever the performance seed, so classifiers trained on one
+        performance hear the same violin in the next.
     max_modes : int, optional
         Cap on modes per string (default: all below the internal Nyquist frequency).
     max_mode_frequency : float or None, Hz
@@ -145,6 +149,7 @@ class Instrument:
 
     def __init__(self, name: str | InstrumentConstants = "violin", *, sample_rate: int = 44100,
                  oversample: int | None = None, seed: int = 0, body: BodySpec = "synthesized",
+                 body_seed: int = 0,
                  max_modes: int | None = None,
                  max_mode_frequency: float | None = DEFAULT_MAX_MODE_FREQUENCY,
                  friction_noise: float = 0.02,
@@ -161,14 +166,14 @@ class Instrument:
         self.sample_rate = int(sample_rate)
         self.oversample = oversample
         self.internal_rate = self.sample_rate * oversample
-        seeds = np.random.SeedSequence(seed).spawn(len(self.constants.strings) + 1)
+        seeds = np.random.SeedSequence(seed).spawn(len(self.constants.strings))
         self.voices = [
             StringVoice(s, self.internal_rate, np.random.default_rng(sq),
                         friction_noise=friction_noise, max_modes=max_modes,
                         max_mode_frequency=max_mode_frequency)
             for s, sq in zip(self.constants.strings, seeds, strict=False)
         ]
-        self.body_response = self._body(body, int(seeds[-1].generate_state(1)[0]))
+        self.body_response = self._body(body, int(body_seed))
         self._trackers = [OnsetTracker(self.internal_rate) for _ in self.voices]
         self.reset()
 

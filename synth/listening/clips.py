@@ -4,12 +4,11 @@ A clip accelerates the bow to its velocity (at most 5 m/s^2), lets the note sett
 ``settle`` seconds and records the next ``record`` seconds (audio, bridge force, slip onsets).
 :func:`auto_label` is the automatic teacher's judgement of a clip.
 
-Every clip is played on one violin: the body of ``Instrument(instrument, seed=body_seed)``
-(default 0, the body a default render plays), while ``seed`` varies the friction noise. The
-synthesized body's dense modes are random per instrument seed, so clips with their own
-seeds were each heard on a different body; a classifier trained on such clips had to
-generalise across bodies it never plays (violin A mp and E f: by-clip accuracy 0.68 with a
-body per clip, 0.83 on the same forces with one body).
+Every clip is played on one violin, ``Instrument(instrument, body_seed=body_seed)`` (default
+0, the body every render plays unless asked otherwise), while ``seed`` varies the friction
+noise. When the body followed each clip's seed, clips were each heard on a different body
+and a classifier had to generalise across bodies it never plays (violin A mp and E f:
+by-clip accuracy 0.68 with a body per clip, 0.83 on the same forces with one body).
 """
 
 from __future__ import annotations
@@ -88,18 +87,9 @@ class Clip:
         return self.audio.size / self.sample_rate
 
 
-@lru_cache(maxsize=8)
-def training_body(instrument: str, sample_rate: int = 44100, body_seed: int = 0) -> np.ndarray:
-    """Body impulse response of ``Instrument(instrument, seed=body_seed)`` (read-only)."""
-    body = Instrument(instrument, sample_rate=sample_rate, seed=body_seed).body_response
-    body = np.array(body, np.float64)
-    body.flags.writeable = False
-    return body
-
-
 def render_clip(spec: ClipSpec, *, settle: float = 0.7, record: float = 0.3, seed: int = 0,
                 sample_rate: int = 44100, context: float = 0.0,
-                body_seed: int | None = 0) -> Clip:
+                body_seed: int = 0) -> Clip:
     """Play a steady clip and record its end.
 
     Parameters
@@ -113,18 +103,14 @@ def render_clip(spec: ClipSpec, *, settle: float = 0.7, record: float = 0.3, see
     context : float, s
         Audio before the recorded part also returned (prepended to ``audio`` only), so that
         causal features of the first recorded hop have a full window.
-    body_seed : int or None
-        The body is that of an instrument with this seed (None: ``seed``'s own body).
+    body_seed : int
+        Which synthesized violin body plays the clip.
 
     Returns
     -------
     Clip
     """
-    if body_seed is None or body_seed == seed:
-        inst = Instrument(spec.instrument, sample_rate=sample_rate, seed=seed)
-    else:
-        inst = Instrument(spec.instrument, sample_rate=sample_rate, seed=seed,
-                          body=training_body(spec.instrument, sample_rate, body_seed))
+    inst = Instrument(spec.instrument, sample_rate=sample_rate, seed=seed, body_seed=body_seed)
     control = BowControl(spec.bow_velocity, spec.bow_force, spec.beta, spec.finger_ratio)
     ramp = max(int(abs(spec.bow_velocity) / MAX_ACCELERATION * sample_rate), 256)
     n_settle = max(int(settle * sample_rate) - int(context * sample_rate), 256)

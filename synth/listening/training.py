@@ -40,7 +40,6 @@ from synth.listening.clips import (
     auto_label,
     recorded_frame_ends,
     render_clip,
-    training_body,
 )
 from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog, perform
 from synth.listening.features import HOP, WINDOW, batch_features, yin_window_for
@@ -333,8 +332,7 @@ def _play_note(model: PairModel, semitones: float, *, force: float, K: float,
                      dynamic=model.dynamic, string=model.string,
                      n_strings=len(inst_c.strings))
     # Practice notes are played on the clips' violin (the training body), noise seeded anew.
-    inst = Instrument(model.instrument, seed=seed,
-                      body=training_body(model.instrument, 44100, settings.body_seed))
+    inst = Instrument(model.instrument, seed=seed, body_seed=settings.body_seed)
     log = perform(plan, {(model.string, model.dynamic): model}, inst,
                   rng=np.random.default_rng(seed), settings=settings.controller, K=K,
                   initial_force=force, record_diagnostics=record_diagnostics)
