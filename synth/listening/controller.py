@@ -257,17 +257,20 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     diag: dict[int, list] = {s: [] for s in range(n_strings)} if record_diagnostics else {}
     features: dict[int, np.ndarray | None] = {}
     jitter = (settings or ControllerSettings()).jitter
-    # Plain Python lists of the plan (per-hop numpy scalar reads cost more than the work).
-    bowed = [np.flatnonzero(row).tolist() for row in plan.bowed]
-    velocity = plan.velocity.tolist()
-    beta = plan.beta.tolist()
-    semitones = plan.semitones.tolist()
-    expected_f0 = plan.expected_f0.tolist()
-    target_speed = plan.target_speed.tolist()
-    dynamic = plan.dynamic.tolist()
-    note_start = plan.note_start.tolist()
-    finger_change = plan.finger_change.tolist()
-    planned = planned_force.tolist() if planned_force is not None else None
+    # Flat Python lists of the plan, entry k * n_strings + s (per-hop numpy scalar reads cost
+    # more than the work; flat lists hold no per-row containers for the garbage collector).
+    hop_of, string_of = np.nonzero(plan.bowed)
+    first_bowed = np.searchsorted(hop_of, np.arange(n + 1)).tolist()
+    bowed_strings = string_of.tolist()
+    velocity = plan.velocity.ravel().tolist()
+    beta = plan.beta.ravel().tolist()
+    semitones = plan.semitones.ravel().tolist()
+    expected_f0 = plan.expected_f0.ravel().tolist()
+    target_speed = plan.target_speed.ravel().tolist()
+    dynamic = plan.dynamic.ravel().tolist()
+    note_start = plan.note_start.ravel().tolist()
+    finger_change = plan.finger_change.ravel().tolist()
+    planned = planned_force.ravel().tolist() if planned_force is not None else None
     # The jitter's standard normal draws, pre-drawn in the order the hop loop uses them (per
     # hop, per bowed string: the force's in ForceController.step, then the velocity's): the
     # same numbers as drawing one at a time, and the generator ends in the same state.
@@ -280,8 +283,10 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     model_of: dict[tuple[int, str], PairModel] = {}
     for k in range(n):
         controls = {}
-        for s in bowed[k]:
-            dyn = str(dynamic[k][s])
+        row = k * n_strings
+        for s in bowed_strings[first_bowed[k]:first_bowed[k + 1]]:
+            i = row + s
+            dyn = str(dynamic[i])
             model = model_of.get((s, dyn))
             if model is None:
                 model = model_of[(s, dyn)] = _model_for(models, s, dyn)
@@ -291,31 +296,30 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
             if current.get(s) != model.dynamic:
                 ctl.set_model(model, K=K)
                 current[s] = model.dynamic
-            if note_start[k][s]:
-                ctl.start_note(semitones[k][s],
-                               initial_force if planned_force is None else 1.0)
+            if note_start[i]:
+                ctl.start_note(semitones[i], initial_force if planned_force is None else 1.0)
                 features[s] = None
-            elif finger_change[k][s] and planned_force is None:
-                old = semitones[k - 1][s] if k else semitones[k][s]
-                ctl.rescale(model.initial_force(semitones[k][s])
+            elif finger_change[i] and planned_force is None:
+                old = semitones[i - n_strings] if k else semitones[i]
+                ctl.rescale(model.initial_force(semitones[i])
                             / max(model.initial_force(old), 1e-9))
             else:
-                speed = abs(velocity[k - 1][s]) if k else 0.0
+                speed = abs(velocity[i - n_strings]) if k else 0.0
                 if jitter:
-                    classes[k, s] = ctl.step(features.get(s), speed, target_speed[k][s],
+                    classes[k, s] = ctl.step(features.get(s), speed, target_speed[i],
                                              noise[draw])
                     draw += 1
                 else:
-                    classes[k, s] = ctl.step(features.get(s), speed, target_speed[k][s])
-            v = velocity[k][s]
+                    classes[k, s] = ctl.step(features.get(s), speed, target_speed[i])
+            v = velocity[i]
             if jitter:
                 v *= 1.0 + jitter * noise[draw]
                 draw += 1
             v = min(max(v, -5.0), 5.0)
-            ratio = 1.0 - 2.0 ** (-semitones[k][s] / 12.0)
-            force = ctl.force if planned is None else min(max(planned[k][s] * ctl.force, 0.0),
+            ratio = 1.0 - 2.0 ** (-semitones[i] / 12.0)
+            force = ctl.force if planned is None else min(max(planned[i] * ctl.force, 0.0),
                                                           MAX_FORCE)
-            controls[s] = BowControl(v, force, beta[k][s], min(ratio, 0.8))
+            controls[s] = BowControl(v, force, beta[i], min(ratio, 0.8))
             force_log[k, s] = force
             vel_log[k, s] = v
         plucks = plan.plucks[k] if plan.plucks else ()
@@ -327,10 +331,10 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
         audio[k * HOP:(k + 1) * HOP] = hop_audio
         for s in controls:
             lis = listeners.get(s)
-            f0 = expected_f0[k][s]
+            f0 = expected_f0[row + s]
             if lis is None:
                 lis = listeners[s] = StreamingFeatures(sr, yin_window=yin_window_for(f0, sr))
-            if note_start[k][s]:
+            if note_start[row + s]:
                 lis.reset()
             feats = lis.push(hop_audio, f0)
             features[s] = feats if lis.ready else None
