@@ -338,16 +338,36 @@ def _cfft(re, im, rev, tables):  # pragma: no cover - numba
         if j > i:
             re[i], re[j] = re[j], re[i]
             im[i], im[j] = im[j], im[i]
-    for s in range(0, m, 2):
-        ar = re[s]
-        ai = im[s]
-        br = re[s + 1]
-        bi = im[s + 1]
-        re[s] = ar + br
-        im[s] = ai + bi
-        re[s + 1] = ar - br
-        im[s + 1] = ai - bi
-    h = 2
+    if m < 4:
+        for s in range(0, m, 2):
+            ar = re[s]
+            ai = im[s]
+            br = re[s + 1]
+            bi = im[s + 1]
+            re[s] = ar + br
+            im[s] = ai + bi
+            re[s + 1] = ar - br
+            im[s + 1] = ai - bi
+        return
+    # The first two stages as one radix-4 pass (twiddles 1 and -1j: no multiplications).
+    for s in range(0, m, 4):
+        r0 = re[s] + re[s + 1]
+        i0 = im[s] + im[s + 1]
+        r1 = re[s] - re[s + 1]
+        i1 = im[s] - im[s + 1]
+        r2 = re[s + 2] + re[s + 3]
+        i2 = im[s + 2] + im[s + 3]
+        r3 = re[s + 2] - re[s + 3]
+        i3 = im[s + 2] - im[s + 3]
+        re[s] = r0 + r2
+        im[s] = i0 + i2
+        re[s + 2] = r0 - r2
+        im[s + 2] = i0 - i2
+        re[s + 1] = r1 + i3
+        im[s + 1] = i1 - r3
+        re[s + 3] = r1 - i3
+        im[s + 3] = i1 + r3
+    h = 4
     while h < m:
         wr = tables[0, h - 1:2 * h - 1]
         wi = tables[1, h - 1:2 * h - 1]
@@ -511,6 +531,7 @@ def _spectral_kernel(frame, mag, freqs, norm, has_previous, out):  # pragma: no 
     peak = 0.0
     log_power = 0.0
     power_sum = 0.0
+    product = 1.0
     for i in range(n):
         m = mag[i]
         total += m
@@ -519,8 +540,15 @@ def _spectral_kernel(frame, mag, freqs, norm, has_previous, out):  # pragma: no 
         if m > peak:
             peak = m
         p = max(m * m, 1e-10)
-        log_power += np.log(p)
+        # One log per product of 16 powers instead of 16 logs: each power is in
+        # [1e-10, 2.7e5] for audio within +-1 (|X| <= sum of the window = 512), so the
+        # product neither under- nor overflows (up to audio of ~1e6).
+        product *= p
+        if i % 16 == 15:
+            log_power += np.log(product)
+            product = 1.0
         power_sum += p
+    log_power += np.log(product)
     centroid = weighted / total if total > 0 else 0.0
     threshold = 0.85 * total
     cum = 0.0
