@@ -106,6 +106,7 @@ class FastPredictor:
         self.mean = np.ascontiguousarray(scaler.mean_, np.float64)
         self.scale = np.ascontiguousarray(scaler.scale_, np.float64)
         self.sv = np.ascontiguousarray(svc.support_vectors_, np.float64)
+        self._sv_t = np.ascontiguousarray(self.sv.T)
         self.gamma = float(svc._gamma)
         # libsvm's own coefficients and -rho (the public ones are negated for two classes).
         self.dual = np.ascontiguousarray(svc._dual_coef_, np.float64)
@@ -118,15 +119,19 @@ class FastPredictor:
 
     def __call__(self, x: np.ndarray) -> int:
         """Class of one feature row [shape=(n_features,)], float64."""
-        return _svc_predict(x, self.mean, self.scale, self.sv, self.gamma, self.dual,
+        return _svc_predict(x, self.mean, self.scale, self._sv_t, self.gamma, self.dual,
                             self.intercept, self.starts, self._labels, self._scratch)
 
 
 @njit(cache=True)
-def _svc_predict(x, mean, scale, sv, gamma, dual, intercept, starts, labels,
+def _svc_predict(x, mean, scale, sv_t, gamma, dual, intercept, starts, labels,
                  scratch):  # pragma: no cover - numba
-    """One row through libsvm's ``svm_predict`` (C-SVC, RBF, dense); returns the class label."""
-    n_sv, dim = sv.shape
+    """One row through libsvm's ``svm_predict`` (C-SVC, RBF, dense); returns the class label.
+
+    ``sv_t`` holds the support vectors transposed [shape=(n_features, n_sv)], so the squared
+    distances run over all support vectors at once, each summed in libsvm's feature order.
+    """
+    dim, n_sv = sv_t.shape
     n_class = labels.size
     kvalue = scratch[:n_sv]
     z = scratch[n_sv:n_sv + dim]
@@ -134,11 +139,15 @@ def _svc_predict(x, mean, scale, sv, gamma, dual, intercept, starts, labels,
     for i in range(dim):
         z[i] = (x[i] - mean[i]) / scale[i]
     for s in range(n_sv):
-        acc = 0.0
-        for i in range(dim):
-            d = z[i] - sv[s, i]
-            acc += d * d
-        kvalue[s] = np.exp(-gamma * acc)
+        kvalue[s] = 0.0
+    for i in range(dim):
+        zi = z[i]
+        row = sv_t[i]
+        for s in range(n_sv):
+            d = zi - row[s]
+            kvalue[s] += d * d
+    for s in range(n_sv):
+        kvalue[s] = np.exp(-gamma * kvalue[s])
     for c in range(n_class):
         vote[c] = 0.0
     p = 0

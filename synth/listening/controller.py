@@ -251,9 +251,10 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     controllers: dict[int, ForceController] = {}
     current: dict[int, str] = {}
     audio = np.zeros(n * HOP, np.float32)
-    force_log = np.zeros((n, n_strings))
-    vel_log = np.zeros((n, n_strings))
-    classes = np.zeros((n, n_strings), np.int64)
+    # Logs as flat lists (entry k * n_strings + s), arrays at the end.
+    force_log = [0.0] * (n * n_strings)
+    vel_log = [0.0] * (n * n_strings)
+    classes = [0] * (n * n_strings)
     diag: dict[int, list] = {s: [] for s in range(n_strings)} if record_diagnostics else {}
     features: dict[int, np.ndarray | None] = {}
     jitter = (settings or ControllerSettings()).jitter
@@ -306,11 +307,11 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
             else:
                 speed = abs(velocity[i - n_strings]) if k else 0.0
                 if jitter:
-                    classes[k, s] = ctl.step(features.get(s), speed, target_speed[i],
-                                             noise[draw])
+                    classes[i] = ctl.step(features.get(s), speed, target_speed[i],
+                                          noise[draw])
                     draw += 1
                 else:
-                    classes[k, s] = ctl.step(features.get(s), speed, target_speed[i])
+                    classes[i] = ctl.step(features.get(s), speed, target_speed[i])
             v = velocity[i]
             if jitter:
                 v *= 1.0 + jitter * noise[draw]
@@ -320,8 +321,8 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
             force = ctl.force if planned is None else min(max(planned[i] * ctl.force, 0.0),
                                                           MAX_FORCE)
             controls[s] = BowControl(v, force, beta[i], min(ratio, 0.8))
-            force_log[k, s] = force
-            vel_log[k, s] = v
+            force_log[i] = force
+            vel_log[i] = v
         plucks = plan.plucks[k] if plan.plucks else ()
         block = instrument.process(HOP, controls, plucks=plucks)
         if record_diagnostics:
@@ -338,7 +339,10 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
                 lis.reset()
             feats = lis.push(hop_audio, f0)
             features[s] = feats if lis.ready else None
-    return PerformanceLog(audio, force_log, vel_log, classes, diag)
+    shape = (n, n_strings)
+    return PerformanceLog(audio, np.array(force_log, np.float64).reshape(shape),
+                          np.array(vel_log, np.float64).reshape(shape),
+                          np.array(classes, np.int64).reshape(shape), diag)
 
 
 def _model_for(models: dict[tuple[int, str], PairModel], string: int, dynamic: str) -> PairModel:
