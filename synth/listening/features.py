@@ -224,12 +224,14 @@ def batch_features(y: np.ndarray, expected_f0: np.ndarray | float, *, sample_rat
 class StreamingFeatures:
     """Causal per-hop features for the control loop (same numbers as :func:`batch_features`).
 
-    One hop is one numba call (:func:`_push_kernel`): the ring buffer shift, a real FFT of
-    the YIN buffer (its spectrum also gives the windowed frame's when the YIN buffer is one
-    WINDOW long: the periodic Hann window is a 3-tap filter in frequency), the FFT of its
-    first half and one inverse FFT for YIN's autocorrelation (radix-2 FFTs in numba,
-    :func:`_cfft`), then the spectral and YIN features. Window, tables and buffers are
-    allocated once.
+    One hop is one numba call (:func:`_push_kernel`): the buffer shift, a real FFT of the
+    YIN buffer's newest half (zero-padded; with it and the kept spectrum of the half pushed
+    ``yin_window / 2 / HOP`` hops ago it gives the buffer's spectrum, and that the windowed
+    frame's when the YIN buffer is one WINDOW long: the periodic Hann window is a 3-tap
+    filter in frequency), one inverse FFT for YIN's autocorrelation (radix-2 FFTs in numba,
+    :func:`_cfft`), then the spectral and YIN features. Pushes of other sizes than HOP work
+    too (an extra FFT until the kept spectra line up again). Window, tables and buffers
+    are allocated once.
 
     Parameters
     ----------
@@ -255,12 +257,21 @@ class StreamingFeatures:
         self._frame_rev, self._frame_tables = _rfft_tables(WINDOW)
         self._work = np.zeros((_WORK_ROWS, self.yin_window + 2))
         self._out = np.zeros(len(FEATURE_NAMES))
+        # Spectra of the buffer's newest half over the last pushes: with pushes of one HOP
+        # the first half's spectrum is the one kept `lag` pushes ago (one FFT saved per hop).
+        half = self.yin_window // 2
+        self._lag = half // HOP if half % HOP == 0 else 0
+        self._halves = np.zeros((max(self._lag, 1), 2, half + 1))
+        self._slot = 0
+        self._regular = self._lag
 
     def reset(self) -> None:
         """Forget the past (silence before the next hop)."""
         self._buffer[:] = 0.0
         self._filled = 0
         self._has_previous = False
+        self._halves[:] = 0.0
+        self._regular = self._lag
 
     @property
     def ready(self) -> bool:
@@ -282,10 +293,15 @@ class StreamingFeatures:
         np.ndarray [shape=(len(FEATURE_NAMES),)]
             A new array (the caller may keep it).
         """
-        self._filled += hop_audio.size
+        size = hop_audio.size
+        self._filled += size
+        # The kept spectrum is the first half's when the last `lag` pushes were one HOP each.
+        self._regular = self._regular + 1 if size == HOP else 0
         _push_kernel(self._buffer, hop_audio, float(expected_f0), float(self.sample_rate),
                      self._has_previous, self._hann, self._freqs, self._norm, self._work,
-                     self._rev, self._tables, self._frame_rev, self._frame_tables, self._out)
+                     self._halves, self._slot, 0 < self._lag <= self._regular, self._rev,
+                     self._tables, self._frame_rev, self._frame_tables, self._out)
+        self._slot = self._slot + 1 if self._slot + 1 < self._lag else 0
         self._has_previous = True
         return self._out.copy()
 
@@ -441,10 +457,16 @@ def _irfft(x_re, x_im, out, zr, zi, rev, tables):  # pragma: no cover - numba
 
 @njit(cache=True)
 def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs, norm, work,
-                 rev, tables, frame_rev, frame_tables, out):  # pragma: no cover - numba
+                 halves, slot, use_ring, rev, tables, frame_rev, frame_tables,
+                 out):  # pragma: no cover - numba
     """One hop of :class:`StreamingFeatures`: shift ``hop`` into ``buf``, features into ``out``.
 
-    ``work`` rows: 0-1 buffer spectrum, 2-3 half-buffer spectrum, 4-5 complex FFT scratch,
+    The buffer's spectrum is that of its zero-padded halves, ``X[f] = A[f] + (-1)**f B[f]``;
+    ``B`` (the newest half) is computed and kept in ``halves[slot]``, which held the spectrum
+    of the half that has since become the first one when ``use_ring`` (every push since was
+    one hop and the half is a whole number of hops), else ``A`` is computed too.
+
+    ``work`` rows: 0-1 buffer spectrum, 2-3 first-half spectrum, 4-5 complex FFT scratch,
     6 magnitude, 7 cross-correlation, 8 energy, 9 CMND, 10 windowed frame.
     """
     w = buf.size
@@ -462,6 +484,8 @@ def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs
     half = n_frame // 2
     x_re = work[0]
     x_im = work[1]
+    h_re = work[2]
+    h_im = work[3]
     zr = work[4, :m]
     zi = work[5, :m]
     mag = work[6, :half + 1]
@@ -472,8 +496,25 @@ def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs
             if buf[i] != 0.0:
                 silent = False
                 break
+    p_re = halves[slot, 0]
+    p_im = halves[slot, 1]
+    need_x = w == n_frame or (pitched and not silent)
+    if need_x:
+        if use_ring:
+            for i in range(m + 1):
+                h_re[i] = p_re[i]
+                h_im[i] = p_im[i]
+        else:
+            _rfft(buf, m, h_re, h_im, zr, zi, rev, tables)
+    _rfft(buf[m:], m, p_re, p_im, zr, zi, rev, tables)
+    if need_x:
+        for i in range(0, m + 1, 2):
+            x_re[i] = h_re[i] + p_re[i]
+            x_im[i] = h_im[i] + p_im[i]
+        for i in range(1, m + 1, 2):
+            x_re[i] = h_re[i] - p_re[i]
+            x_im[i] = h_im[i] - p_im[i]
     if w == n_frame:
-        _rfft(buf, w, x_re, x_im, zr, zi, rev, tables)
         for i in range(half + 1):
             lo = i - 1 if i > 0 else 1
             hi = i + 1 if i < half else half - 1
@@ -486,22 +527,19 @@ def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs
         frame = work[10, :n_frame]
         for i in range(n_frame):
             frame[i] = buf[w - n_frame + i] * window[i]
-        _rfft(frame, n_frame, x_re, x_im, work[4, :half], work[5, :half], frame_rev,
+        f_re = work[7, :half + 1]
+        f_im = work[8, :half + 1]
+        _rfft(frame, n_frame, f_re, f_im, work[4, :half], work[5, :half], frame_rev,
               frame_tables)
         for i in range(half + 1):
-            mag[i] = np.sqrt(x_re[i] * x_re[i] + x_im[i] * x_im[i])
-        if pitched and not silent:
-            _rfft(buf, w, x_re, x_im, zr, zi, rev, tables)
+            mag[i] = np.sqrt(f_re[i] * f_re[i] + f_im[i] * f_im[i])
     _spectral_kernel(buf[w - n_frame:], mag, freqs, norm, has_previous, out)
     if not pitched or silent:
         out[7] = 0.0
         out[8] = 1.0
         return
-    h_re = work[2]
-    h_im = work[3]
-    _rfft(buf, m, h_re, h_im, zr, zi, rev, tables)
     for i in range(m + 1):
-        # X conj(H)
+        # X conj(A)
         a = x_re[i] * h_re[i] + x_im[i] * h_im[i]
         b = x_im[i] * h_re[i] - x_re[i] * h_im[i]
         h_re[i] = a
