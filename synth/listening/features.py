@@ -633,18 +633,21 @@ def _yin_kernel(x, cross, expected_f0, sample_rate, energy, cmnd):  # pragma: no
     """
     w = x.size
     max_lag = w // 2
+    lo = int(min(max(np.floor(sample_rate / (2.0 * expected_f0)), 2), max_lag - 2))
+    hi = int(min(max(np.ceil(sample_rate / (0.5 * expected_f0)), 3), max_lag - 1))
+    # Only lags up to hi + 1 are read below (the cumulative mean runs from lag 1 as in
+    # the full-range computation, so these values are the same).
+    top = min(hi + 1, max_lag)
     energy[0] = 0.0
-    for i in range(w):
+    for i in range(top + max_lag):
         energy[i + 1] = energy[i] + x[i] * x[i]
     e_head = energy[max_lag]
     cmnd[0] = 1.0
     cum = 0.0
-    for tau in range(1, max_lag + 1):
+    for tau in range(1, top + 1):
         d = max(e_head + energy[tau + max_lag] - energy[tau] - 2.0 * cross[tau], 0.0)
         cum += d
         cmnd[tau] = d * tau / max(cum, 1e-10)
-    lo = int(min(max(np.floor(sample_rate / (2.0 * expected_f0)), 2), max_lag - 2))
-    hi = int(min(max(np.ceil(sample_rate / (0.5 * expected_f0)), 3), max_lag - 1))
     first = -1
     arg = lo
     for lag in range(lo, hi + 1):
