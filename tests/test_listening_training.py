@@ -91,3 +91,21 @@ def test_fast_predictor_agrees_with_sklearn_near_the_boundaries(models_dir):  # 
     X = z * scaler.scale_ + scaler.mean_
     fast = model.fast()
     assert np.array_equal([fast(x) for x in X], model.predict(X))
+
+
+@pytest.mark.parametrize("labels", [[2, 4], [1, 3, 5]])
+def test_fast_predictor_agrees_with_sklearn_for_two_and_three_classes(labels):
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+    from sklearn.svm import SVC
+
+    from synth.listening.classifier import FastPredictor
+
+    rng = np.random.default_rng(len(labels))
+    X = rng.normal(size=(400, 9)) * rng.uniform(0.1, 100.0, 9)
+    score = X[:, :len(labels)] / X[:, :len(labels)].std(0) + rng.normal(size=(400, len(labels)))
+    y = np.array(labels)[np.argmax(score, axis=1)]
+    pipeline = make_pipeline(StandardScaler(), SVC(C=10.0, gamma="scale")).fit(X, y)
+    fast = FastPredictor(pipeline)
+    test = rng.normal(size=(5000, 9)) * X.std(0)
+    assert np.array_equal([fast(x) for x in test], pipeline.predict(test))
