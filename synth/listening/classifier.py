@@ -118,7 +118,9 @@ class FastPredictor:
         self._scratch = np.zeros(self.sv.shape[0] + self.mean.size + self.classes.size)
 
     def __call__(self, x: np.ndarray) -> int:
-        """Class of one feature row [shape=(n_features,)], float64."""
+        """Class of one feature row [shape=(n_features,)]."""
+        if type(x) is not np.ndarray or x.dtype != np.float64:
+            x = np.asarray(x, np.float64)
         return _svc_predict(x, self.mean, self.scale, self._sv_t, self.gamma, self.dual,
                             self.intercept, self.starts, self._labels, self._scratch)
 
