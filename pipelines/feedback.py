@@ -10,6 +10,7 @@ what the controller actually did (one frame per hop per string).
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any
 
@@ -218,15 +219,38 @@ def played_actions(perf: Performance, plan: HopPlan, span: np.ndarray, log: Perf
 
 
 def diagnostics_table(log: PerformanceLog, sample_rate: int) -> pd.DataFrame:
-    """Per-hop contact diagnostics recorded during the feedback render."""
-    rows = []
-    for s, hops in log.diagnostics.items():
-        for k, d in hops:
-            period = d.sounding_period if np.isfinite(d.sounding_period) else None
-            rows.append((k * HOP / sample_rate, s, d.slip_onsets, d.slipping_share,
-                         d.contact_share, d.mean_slip_speed, period))
-    rows.sort(key=lambda r: (r[0], r[1]))
-    return pd.DataFrame(rows, columns=CONTACT_DIAGNOSTICS.column_names)
+    """Per-hop contact diagnostics recorded during the feedback render.
+
+    Parameters
+    ----------
+    log : PerformanceLog
+        Output of :func:`synth.listening.perform` with ``record_diagnostics``.
+    sample_rate : int, Hz
+
+    Returns
+    -------
+    pandas.DataFrame
+        Table ``CONTACT_DIAGNOSTICS``, one row per hop per string, sorted by time then
+        string; ``time`` in s at the hop's start, ``sounding_period`` in s (NaN when none).
+    """
+    hops, strings, entries = [], [], []
+    for s, recorded in log.diagnostics.items():
+        for k, d in recorded:
+            hops.append(k)
+            strings.append(s)
+            entries.append(d)
+    if not entries:
+        return pd.DataFrame([], columns=CONTACT_DIAGNOSTICS.column_names)
+    hop = np.array(hops, np.int64)
+    string = np.array(strings, np.int64)
+    order = np.lexsort((string, hop))
+    diags = [entries[i] for i in order]
+    time = hop[order] * HOP / sample_rate
+    period = [d.sounding_period if math.isfinite(d.sounding_period) else None for d in diags]
+    columns = [time.tolist(), string[order].tolist(), [d.slip_onsets for d in diags],
+               [d.slipping_share for d in diags], [d.contact_share for d in diags],
+               [d.mean_slip_speed for d in diags], period]
+    return pd.DataFrame(dict(zip(CONTACT_DIAGNOSTICS.column_names, columns, strict=True)))
 
 
 def scale_notes(*, tonic: int = 55, octaves: int = 2, tempo: float = 60.0,

@@ -62,3 +62,50 @@ def test_yin_finds_the_pitch_and_clips_the_difference(f0):
     assert np.all(aper < 0.05)
     far = batch_features(y, f0 * 0.5 ** (5 / 12), sample_rate=SR)[:, col("pitch_diff")]
     assert np.all(np.abs(far) <= 3.0)
+
+
+@pytest.mark.parametrize("n", [4, 64, 1024, 4096])
+def test_numba_real_fft_matches_numpy(n):
+    from synth.listening.features import _irfft, _rfft, _rfft_tables
+
+    rng = np.random.default_rng(n)
+    x = rng.normal(size=n)
+    rev, tables = _rfft_tables(n)
+    re, im = np.zeros(n // 2 + 1), np.zeros(n // 2 + 1)
+    zr, zi = np.zeros(n // 2), np.zeros(n // 2)
+    for length in (n, n // 2):
+        _rfft(x, length, re, im, zr, zi, rev, tables)
+        np.testing.assert_allclose(re + 1j * im, np.fft.rfft(x[:length], n), atol=1e-12 * n)
+    spec = np.fft.rfft(x)
+    back = np.zeros(n)
+    _irfft(spec.real.copy(), spec.imag.copy(), back, zr, zi, rev, tables)
+    np.testing.assert_allclose(back, x, atol=1e-12 * n)
+
+
+def test_streaming_with_a_long_yin_window_equals_batch(signal):
+    f = batch_features(signal, 110.0, sample_rate=SR, yin_window=2048)
+    st = StreamingFeatures(SR, yin_window=2048)
+    rows = [st.push(signal[i:i + HOP], 110.0) for i in range(0, signal.size - HOP + 1, HOP)]
+    got = np.array(rows[WINDOW // HOP - 1:])[: f.shape[0]]
+    np.testing.assert_allclose(got[1:], f[1:got.shape[0]], rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("yin_window", [WINDOW, 4 * WINDOW])
+def test_streaming_survives_pushes_of_other_sizes_and_resets(signal, yin_window):
+    # One hop pushed in two pieces (and a reset) must not break the spectra kept per hop.
+    a = StreamingFeatures(SR, yin_window=yin_window)
+    b = StreamingFeatures(SR, yin_window=yin_window)
+    for i, start in enumerate(range(0, 60 * HOP, HOP)):
+        hop = signal[start:start + HOP]
+        if i == 30:
+            a.reset()
+            b.reset()
+        want = a.push(hop, 293.66)
+        if i in (10, 11, 33):
+            b.push(hop[:100], 293.66)
+            got = b.push(hop[100:], 293.66)
+            # The flux is against the frame of the previous push (here the first piece).
+            got[col("flux")] = want[col("flux")]
+        else:
+            got = b.push(hop, 293.66)
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9, err_msg=f"hop {i}")

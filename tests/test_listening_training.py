@@ -77,3 +77,36 @@ def test_train_cli_rejects_bad_input(tmp_path, capsys):
     assert main(["train", "-o", str(tmp_path), "--teacher", "human"]) == 2
     assert "needs --labels" in capsys.readouterr().err
     assert main(["train", "-o", str(tmp_path), "--pairs", "9:mf"]) == 2
+
+
+def test_fast_predictor_agrees_with_sklearn_near_the_boundaries(models_dir):  # noqa: F811
+    model = load_pair(models_dir, "violin", *PAIR)
+    scaler, svc = model.pipeline[0], model.pipeline[-1]
+    rng = np.random.default_rng(0)
+    sv = svc.support_vectors_
+    i, j = rng.integers(0, sv.shape[0], (2, 20000))
+    t = rng.uniform(size=(20000, 1))
+    # Points on segments between support vectors (many close to a decision boundary) and
+    # spread around the training data, in the original feature units.
+    z = np.vstack([sv[i] * t + sv[j] * (1 - t), 2.0 * rng.normal(size=(5000, sv.shape[1]))])
+    X = z * scaler.scale_ + scaler.mean_
+    fast = model.fast()
+    assert np.array_equal([fast(x) for x in X], model.predict(X))
+
+
+@pytest.mark.parametrize("labels", [[2, 4], [1, 3, 5]])
+def test_fast_predictor_agrees_with_sklearn_for_two_and_three_classes(labels):
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+    from sklearn.svm import SVC
+
+    from synth.listening.classifier import FastPredictor
+
+    rng = np.random.default_rng(len(labels))
+    X = rng.normal(size=(400, 9)) * rng.uniform(0.1, 100.0, 9)
+    score = X[:, :len(labels)] / X[:, :len(labels)].std(0) + rng.normal(size=(400, len(labels)))
+    y = np.array(labels)[np.argmax(score, axis=1)]
+    pipeline = make_pipeline(StandardScaler(), SVC(C=10.0, gamma="scale")).fit(X, y)
+    fast = FastPredictor(pipeline)
+    test = rng.normal(size=(5000, 9)) * X.std(0)
+    assert np.array_equal([fast(x) for x in test], pipeline.predict(test))

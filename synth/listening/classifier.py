@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from data_schemas.errors import ArcoError
 from data_schemas.io import atomic_path
@@ -88,41 +89,88 @@ class PairModel:
 class FastPredictor:
     """RBF one-vs-one SVC prediction for one row without scikit-learn's per-call overhead.
 
-    Reproduces ``Pipeline(StandardScaler, SVC(kernel='rbf'))`` decisions (ties broken like
-    libsvm: the lowest class wins).
+    Reproduces ``Pipeline(StandardScaler, SVC(kernel='rbf'))`` decisions with libsvm's own
+    arithmetic (:func:`_svc_predict`, numba): the standardised row, the RBF kernel
+    ``exp(-gamma * sum((z - sv)**2))`` per support vector, each one-vs-one decision summed
+    over the two classes' support vectors in libsvm's order minus ``rho``, and the vote with
+    ties to the lowest class.
+
+    Parameters
+    ----------
+    pipeline : sklearn.pipeline.Pipeline
+        A fitted StandardScaler + SVC (RBF kernel, two or more classes).
     """
 
     def __init__(self, pipeline: Any) -> None:
         scaler, svc = pipeline[0], pipeline[-1]
-        self.mean = np.asarray(scaler.mean_, np.float64)
-        self.scale = np.asarray(scaler.scale_, np.float64)
-        self.sv = np.asarray(svc.support_vectors_, np.float64)
-        self.sv_norm = np.sum(self.sv**2, axis=1)
+        self.mean = np.ascontiguousarray(scaler.mean_, np.float64)
+        self.scale = np.ascontiguousarray(scaler.scale_, np.float64)
+        self.sv = np.ascontiguousarray(svc.support_vectors_, np.float64)
+        self._sv_t = np.ascontiguousarray(self.sv.T)
         self.gamma = float(svc._gamma)
-        self.dual = np.asarray(svc.dual_coef_, np.float64)
-        self.intercept = np.asarray(svc.intercept_, np.float64)
+        # libsvm's own coefficients and -rho (the public ones are negated for two classes).
+        self.dual = np.ascontiguousarray(svc._dual_coef_, np.float64)
+        self.intercept = np.ascontiguousarray(svc._intercept_, np.float64)
         self.classes = np.asarray(svc.classes_)
-        counts = np.asarray(svc.n_support_)
-        starts = np.concatenate([[0], np.cumsum(counts)])
-        n = self.classes.size
-        pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
-        # One row of coefficients per one-vs-one pair: decision = coef @ kernel + intercept.
-        self.coef = np.zeros((len(pairs), self.sv.shape[0]))
-        for p, (i, j) in enumerate(pairs):
-            self.coef[p, starts[i]:starts[i + 1]] = self.dual[j - 1, starts[i]:starts[i + 1]]
-            self.coef[p, starts[j]:starts[j + 1]] = self.dual[i, starts[j]:starts[j + 1]]
-        self.first = np.array([i for i, _ in pairs], np.int64)
-        self.second = np.array([j for _, j in pairs], np.int64)
-        self.gamma_sv_norm = -self.gamma * self.sv_norm
-        self.sv2 = 2.0 * self.gamma * self.sv
+        self._labels = self.classes.astype(np.int64)
+        counts = np.asarray(svc._n_support, np.int64)
+        self.starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self._scratch = np.zeros(self.sv.shape[0] + self.mean.size + self.classes.size)
 
     def __call__(self, x: np.ndarray) -> int:
         """Class of one feature row [shape=(n_features,)]."""
-        z = (x - self.mean) / self.scale
-        k = np.exp(self.gamma_sv_norm + self.sv2 @ z - self.gamma * (z @ z))
-        winners = np.where(self.coef @ k + self.intercept > 0, self.first, self.second)
-        votes = np.bincount(winners, minlength=self.classes.size)
-        return int(self.classes[int(np.argmax(votes))])
+        if type(x) is not np.ndarray or x.dtype != np.float64:
+            x = np.asarray(x, np.float64)
+        return _svc_predict(x, self.mean, self.scale, self._sv_t, self.gamma, self.dual,
+                            self.intercept, self.starts, self._labels, self._scratch)
+
+
+@njit(cache=True)
+def _svc_predict(x, mean, scale, sv_t, gamma, dual, intercept, starts, labels,
+                 scratch):  # pragma: no cover - numba
+    """One row through libsvm's ``svm_predict`` (C-SVC, RBF, dense); returns the class label.
+
+    ``sv_t`` holds the support vectors transposed [shape=(n_features, n_sv)], so the squared
+    distances run over all support vectors at once, each summed in libsvm's feature order.
+    """
+    dim, n_sv = sv_t.shape
+    n_class = labels.size
+    kvalue = scratch[:n_sv]
+    z = scratch[n_sv:n_sv + dim]
+    vote = scratch[n_sv + dim:n_sv + dim + n_class]
+    for i in range(dim):
+        z[i] = (x[i] - mean[i]) / scale[i]
+    for s in range(n_sv):
+        kvalue[s] = 0.0
+    for i in range(dim):
+        zi = z[i]
+        row = sv_t[i]
+        for s in range(n_sv):
+            d = zi - row[s]
+            kvalue[s] += d * d
+    for s in range(n_sv):
+        kvalue[s] = np.exp(-gamma * kvalue[s])
+    for c in range(n_class):
+        vote[c] = 0.0
+    p = 0
+    for i in range(n_class):
+        for j in range(i + 1, n_class):
+            acc = 0.0
+            for k in range(starts[i], starts[i + 1]):
+                acc += dual[j - 1, k] * kvalue[k]
+            for k in range(starts[j], starts[j + 1]):
+                acc += dual[i, k] * kvalue[k]
+            acc -= -intercept[p]
+            if acc > 0:
+                vote[i] += 1.0
+            else:
+                vote[j] += 1.0
+            p += 1
+    best = 0
+    for c in range(1, n_class):
+        if vote[c] > vote[best]:
+            best = c
+    return labels[best]
 
 
 def pair_key(instrument: str, string: int, dynamic: str) -> str:

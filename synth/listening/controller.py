@@ -102,7 +102,8 @@ class ForceController:
         """Scale the force (a finger change inside a slur)."""
         self.force = float(np.clip(self.force * factor, 0.0, MAX_FORCE))
 
-    def step(self, features: np.ndarray | None, speed: float, target_speed: float) -> int:
+    def step(self, features: np.ndarray | None, speed: float, target_speed: float,
+             noise: float | None = None) -> int:
         """Classify the last window and update the force.
 
         Parameters
@@ -113,6 +114,10 @@ class ForceController:
             Bow speed just played (unsigned).
         target_speed : float, m/s
             Planned speed of the note.
+        noise : float, optional
+            Standard normal draw of this hop's force jitter; default: drawn now from the
+            controller's generator (:func:`perform` pre-draws the same numbers in the same
+            order).
 
         Returns
         -------
@@ -133,7 +138,9 @@ class ForceController:
             c_avg = sum(self._recent) / len(self._recent)
             self.force *= self.K ** (3.0 - c_avg)
         if s.jitter:
-            self.force *= 1.0 + s.jitter * float(self.rng.standard_normal())
+            if noise is None:
+                noise = float(self.rng.standard_normal())
+            self.force *= 1.0 + s.jitter * noise
         self.force = min(max(self.force, self.bounds[0]), self.bounds[1])
         return c
 
@@ -244,60 +251,98 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     controllers: dict[int, ForceController] = {}
     current: dict[int, str] = {}
     audio = np.zeros(n * HOP, np.float32)
-    force_log = np.zeros((n, n_strings))
-    vel_log = np.zeros((n, n_strings))
-    classes = np.zeros((n, n_strings), np.int64)
+    # Logs as flat lists (entry k * n_strings + s), arrays at the end.
+    force_log = [0.0] * (n * n_strings)
+    vel_log = [0.0] * (n * n_strings)
+    classes = [0] * (n * n_strings)
     diag: dict[int, list] = {s: [] for s in range(n_strings)} if record_diagnostics else {}
     features: dict[int, np.ndarray | None] = {}
     jitter = (settings or ControllerSettings()).jitter
+    # Flat Python lists of the plan, entry k * n_strings + s (per-hop numpy scalar reads cost
+    # more than the work; flat lists hold no per-row containers for the garbage collector).
+    hop_of, string_of = np.nonzero(plan.bowed)
+    first_bowed = np.searchsorted(hop_of, np.arange(n + 1)).tolist()
+    bowed_strings = string_of.tolist()
+    velocity = plan.velocity.ravel().tolist()
+    beta = plan.beta.ravel().tolist()
+    semitones = plan.semitones.ravel().tolist()
+    expected_f0 = plan.expected_f0.ravel().tolist()
+    target_speed = plan.target_speed.ravel().tolist()
+    dynamic = plan.dynamic.ravel().tolist()
+    note_start = plan.note_start.ravel().tolist()
+    finger_change = plan.finger_change.ravel().tolist()
+    planned = planned_force.ravel().tolist() if planned_force is not None else None
+    # The jitter's standard normal draws, pre-drawn in the order the hop loop uses them (per
+    # hop, per bowed string: the force's in ForceController.step, then the velocity's): the
+    # same numbers as drawing one at a time, and the generator ends in the same state.
+    steps = plan.bowed & ~plan.note_start
+    if planned_force is None:
+        steps &= ~plan.finger_change
+    n_draws = int(plan.bowed.sum() + steps.sum()) if jitter else 0
+    noise = rng.standard_normal(n_draws).tolist() if n_draws else []
+    draw = 0
+    model_of: dict[tuple[int, str], PairModel] = {}
     for k in range(n):
         controls = {}
-        for s in np.flatnonzero(plan.bowed[k]):
-            s = int(s)
-            model = _model_for(models, s, str(plan.dynamic[k, s]))
+        row = k * n_strings
+        for s in bowed_strings[first_bowed[k]:first_bowed[k + 1]]:
+            i = row + s
+            dyn = str(dynamic[i])
+            model = model_of.get((s, dyn))
+            if model is None:
+                model = model_of[(s, dyn)] = _model_for(models, s, dyn)
             ctl = controllers.get(s)
             if ctl is None:
                 ctl = controllers[s] = ForceController(model, rng, settings, K=K)
             if current.get(s) != model.dynamic:
                 ctl.set_model(model, K=K)
                 current[s] = model.dynamic
-            if plan.note_start[k, s]:
-                ctl.start_note(plan.semitones[k, s],
-                               initial_force if planned_force is None else 1.0)
+            if note_start[i]:
+                ctl.start_note(semitones[i], initial_force if planned_force is None else 1.0)
                 features[s] = None
-            elif plan.finger_change[k, s] and planned_force is None:
-                old = plan.semitones[k - 1, s] if k else plan.semitones[k, s]
-                ctl.rescale(model.initial_force(plan.semitones[k, s])
+            elif finger_change[i] and planned_force is None:
+                old = semitones[i - n_strings] if k else semitones[i]
+                ctl.rescale(model.initial_force(semitones[i])
                             / max(model.initial_force(old), 1e-9))
             else:
-                speed = abs(float(plan.velocity[k - 1, s])) if k else 0.0
-                classes[k, s] = ctl.step(features.get(s), speed, float(plan.target_speed[k, s]))
-            v = float(plan.velocity[k, s])
+                speed = abs(velocity[i - n_strings]) if k else 0.0
+                if jitter:
+                    classes[i] = ctl.step(features.get(s), speed, target_speed[i],
+                                          noise[draw])
+                    draw += 1
+                else:
+                    classes[i] = ctl.step(features.get(s), speed, target_speed[i])
+            v = velocity[i]
             if jitter:
-                v *= 1.0 + jitter * float(rng.standard_normal())
-            v = float(np.clip(v, -5.0, 5.0))
-            ratio = 1.0 - 2.0 ** (-float(plan.semitones[k, s]) / 12.0)
-            force = ctl.force if planned_force is None else float(
-                np.clip(planned_force[k, s] * ctl.force, 0.0, MAX_FORCE))
-            controls[s] = BowControl(v, force, float(plan.beta[k, s]), min(ratio, 0.8))
-            force_log[k, s] = force
-            vel_log[k, s] = v
+                v *= 1.0 + jitter * noise[draw]
+                draw += 1
+            v = min(max(v, -5.0), 5.0)
+            ratio = 1.0 - 2.0 ** (-semitones[i] / 12.0)
+            force = ctl.force if planned is None else min(max(planned[i] * ctl.force, 0.0),
+                                                          MAX_FORCE)
+            controls[s] = BowControl(v, force, beta[i], min(ratio, 0.8))
+            force_log[i] = force
+            vel_log[i] = v
         plucks = plan.plucks[k] if plan.plucks else ()
         block = instrument.process(HOP, controls, plucks=plucks)
         if record_diagnostics:
             for s, d in block.diagnostics.items():
                 diag[s].append((k, d))
-        audio[k * HOP:(k + 1) * HOP] = block.audio
+        hop_audio = block.audio
+        audio[k * HOP:(k + 1) * HOP] = hop_audio
         for s in controls:
             lis = listeners.get(s)
-            f0 = float(plan.expected_f0[k, s])
+            f0 = expected_f0[row + s]
             if lis is None:
                 lis = listeners[s] = StreamingFeatures(sr, yin_window=yin_window_for(f0, sr))
-            if plan.note_start[k, s]:
+            if note_start[row + s]:
                 lis.reset()
-            feats = lis.push(block.audio, f0)
+            feats = lis.push(hop_audio, f0)
             features[s] = feats if lis.ready else None
-    return PerformanceLog(audio, force_log, vel_log, classes, diag)
+    shape = (n, n_strings)
+    return PerformanceLog(audio, np.array(force_log, np.float64).reshape(shape),
+                          np.array(vel_log, np.float64).reshape(shape),
+                          np.array(classes, np.int64).reshape(shape), diag)
 
 
 def _model_for(models: dict[tuple[int, str], PairModel], string: int, dynamic: str) -> PairModel:

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from scipy.fft import next_fast_len
 
 WINDOW = 1024
 HOP = 256
@@ -225,20 +224,26 @@ def batch_features(y: np.ndarray, expected_f0: np.ndarray | float, *, sample_rat
 class StreamingFeatures:
     """Causal per-hop features for the control loop (same numbers as :func:`batch_features`).
 
-    One hop costs two real FFTs of the frame (spectrum, YIN autocorrelation) and two numba
-    kernels (:func:`_spectral_kernel`, :func:`_yin_kernel`); the window, frequencies and
-    buffers are allocated once.
+    One hop is one numba call (:func:`_push_kernel`): the buffer shift, a real FFT of the
+    YIN buffer's newest half (zero-padded; with it and the kept spectrum of the half pushed
+    ``yin_window / 2 / HOP`` hops ago it gives the buffer's spectrum, and that the windowed
+    frame's when the YIN buffer is one WINDOW long: the periodic Hann window is a 3-tap
+    filter in frequency), one inverse FFT for YIN's autocorrelation (radix-2 FFTs in numba,
+    :func:`_cfft`), then the spectral and YIN features. Pushes of other sizes than HOP work
+    too (an extra FFT until the kept spectra line up again). Window, tables and buffers
+    are allocated once.
 
     Parameters
     ----------
     sample_rate : int, Hz
     yin_window : int, samples
-        YIN frame length (>= WINDOW).
+        YIN frame length (>= WINDOW; rounded up to a power of two).
     """
 
     def __init__(self, sample_rate: int = 44100, *, yin_window: int = WINDOW) -> None:
         self.sample_rate = int(sample_rate)
-        self.yin_window = int(max(yin_window, WINDOW))
+        w = int(max(yin_window, WINDOW))
+        self.yin_window = 1 << (w - 1).bit_length()
         self._buffer = np.zeros(self.yin_window)
         self._filled = 0
         self._hann = hann(WINDOW)
@@ -246,14 +251,27 @@ class StreamingFeatures:
         self._norm = np.zeros(WINDOW // 2 + 1)
         self._has_previous = False
         self._max_lag = self.yin_window // 2
-        self._nfft = next_fast_len(self.yin_window + self._max_lag, real=True)
+        # Circular correlation of the buffer with its first half (zero-padded) has no
+        # wrap-around for lags <= yin_window / 2, so an FFT of the buffer's length suffices.
+        self._rev, self._tables = _rfft_tables(self.yin_window)
+        self._frame_rev, self._frame_tables = _rfft_tables(WINDOW)
+        self._work = np.zeros((_WORK_ROWS, self.yin_window + 2))
         self._out = np.zeros(len(FEATURE_NAMES))
+        # Spectra of the buffer's newest half over the last pushes: with pushes of one HOP
+        # the first half's spectrum is the one kept `lag` pushes ago (one FFT saved per hop).
+        half = self.yin_window // 2
+        self._lag = half // HOP if half % HOP == 0 else 0
+        self._halves = np.zeros((max(self._lag, 1), 2, half + 1))
+        self._slot = 0
+        self._regular = self._lag
 
     def reset(self) -> None:
         """Forget the past (silence before the next hop)."""
         self._buffer[:] = 0.0
         self._filled = 0
         self._has_previous = False
+        self._halves[:] = 0.0
+        self._regular = self._lag
 
     @property
     def ready(self) -> bool:
@@ -266,36 +284,275 @@ class StreamingFeatures:
         Parameters
         ----------
         hop_audio : np.ndarray [shape=(HOP,)]
+            Audio of the hop (any float dtype).
         expected_f0 : float, Hz
+            Pitch the hop is meant to sound (NaN or <= 0: no pitch feature).
 
         Returns
         -------
         np.ndarray [shape=(len(FEATURE_NAMES),)]
             A new array (the caller may keep it).
         """
-        k = hop_audio.size
-        buf = self._buffer
-        buf[:-k] = buf[k:]
-        buf[-k:] = hop_audio
-        self._filled += k
-        frame = buf[-WINDOW:]
-        mag = np.abs(np.fft.rfft(frame * self._hann))
-        out = self._out
-        _spectral_kernel(frame, mag, self._freqs, self._norm, self._has_previous, out)
+        size = hop_audio.size
+        self._filled += size
+        # The kept spectrum is the first half's when the last `lag` pushes were one HOP each.
+        self._regular = self._regular + 1 if size == HOP else 0
+        _push_kernel(self._buffer, hop_audio, float(expected_f0), float(self.sample_rate),
+                     self._has_previous, self._hann, self._freqs, self._norm, self._work,
+                     self._halves, self._slot, 0 < self._lag <= self._regular, self._rev,
+                     self._tables, self._frame_rev, self._frame_tables, self._out)
+        self._slot = self._slot + 1 if self._slot + 1 < self._lag else 0
         self._has_previous = True
-        f0 = float(expected_f0)
-        if np.isfinite(f0) and f0 > 0.0 and buf.any():
-            spec_x = np.fft.rfft(buf, self._nfft)
-            spec_h = np.fft.rfft(buf[: self._max_lag], self._nfft)
-            cross = np.fft.irfft(spec_x * np.conj(spec_h), self._nfft)
-            pitch, aper = _yin_kernel(buf, cross, f0, float(self.sample_rate))
-            diff = 12.0 * np.log2(pitch / f0) if np.isfinite(pitch) and pitch > 0 else 0.0
-            out[7] = min(max(diff, -PITCH_CLIP), PITCH_CLIP)
-            out[8] = aper
+        return self._out.copy()
+
+
+_WORK_ROWS = 11
+
+
+def _rfft_tables(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Tables of a real FFT of ``n`` samples (a power of two) through a complex FFT of n/2.
+
+    Parameters
+    ----------
+    n : int
+        Real FFT length (power of two, >= 4).
+
+    Returns
+    -------
+    rev : np.ndarray [shape=(n // 2,)], int64
+        Bit-reversal permutation of the complex FFT.
+    tables : np.ndarray [shape=(4, n // 2 + 1)]
+        Rows: real and imaginary parts of the per-stage twiddles of the complex FFT (the
+        stage of half-length h at ``h - 1 .. 2h - 2``), then of ``exp(-2 pi i k / n)`` for
+        ``k = 0 .. n/2`` (the real-FFT split).
+    """
+    m = n // 2
+    bits = m.bit_length() - 1
+    idx = np.arange(m)
+    rev = np.zeros(m, np.int64)
+    for b in range(bits):
+        rev |= ((idx >> b) & 1) << (bits - 1 - b)
+    tables = np.zeros((4, m + 1))
+    h = 1
+    while h < m:
+        tw = np.exp(-2j * np.pi * np.arange(h) / (2 * h))
+        tables[0, h - 1:2 * h - 1] = tw.real
+        tables[1, h - 1:2 * h - 1] = tw.imag
+        h *= 2
+    split = np.exp(-2j * np.pi * np.arange(m + 1) / n)
+    tables[2] = split.real
+    tables[3] = split.imag
+    return rev, tables
+
+
+@njit(cache=True)
+def _cfft(re, im, rev, tables):  # pragma: no cover - numba
+    """In-place radix-2 complex FFT (decimation in time) of ``re + 1j * im`` [shape=(m,)]."""
+    m = re.size
+    for i in range(m):
+        j = rev[i]
+        if j > i:
+            re[i], re[j] = re[j], re[i]
+            im[i], im[j] = im[j], im[i]
+    if m < 4:
+        for s in range(0, m, 2):
+            ar = re[s]
+            ai = im[s]
+            br = re[s + 1]
+            bi = im[s + 1]
+            re[s] = ar + br
+            im[s] = ai + bi
+            re[s + 1] = ar - br
+            im[s + 1] = ai - bi
+        return
+    # The first two stages as one radix-4 pass (twiddles 1 and -1j: no multiplications).
+    for s in range(0, m, 4):
+        r0 = re[s] + re[s + 1]
+        i0 = im[s] + im[s + 1]
+        r1 = re[s] - re[s + 1]
+        i1 = im[s] - im[s + 1]
+        r2 = re[s + 2] + re[s + 3]
+        i2 = im[s + 2] + im[s + 3]
+        r3 = re[s + 2] - re[s + 3]
+        i3 = im[s + 2] - im[s + 3]
+        re[s] = r0 + r2
+        im[s] = i0 + i2
+        re[s + 2] = r0 - r2
+        im[s + 2] = i0 - i2
+        re[s + 1] = r1 + i3
+        im[s + 1] = i1 - r3
+        re[s + 3] = r1 - i3
+        im[s + 3] = i1 + r3
+    h = 4
+    while h < m:
+        wr = tables[0, h - 1:2 * h - 1]
+        wi = tables[1, h - 1:2 * h - 1]
+        for s in range(0, m, 2 * h):
+            lr = re[s:s + h]
+            li = im[s:s + h]
+            hr = re[s + h:s + 2 * h]
+            hi = im[s + h:s + 2 * h]
+            for j in range(h):
+                xr = hr[j] * wr[j] - hi[j] * wi[j]
+                xi = hr[j] * wi[j] + hi[j] * wr[j]
+                hr[j] = lr[j] - xr
+                hi[j] = li[j] - xi
+                lr[j] += xr
+                li[j] += xi
+        h *= 2
+
+
+@njit(cache=True)
+def _rfft(x, length, out_re, out_im, zr, zi, rev, tables):  # pragma: no cover - numba
+    """Real FFT of ``x[:length]`` zero-padded to ``n = 2 * zr.size``: bins 0..n/2 in ``out_*``."""
+    m = zr.size
+    for i in range(m):
+        a = 2 * i
+        zr[i] = x[a] if a < length else 0.0
+        zi[i] = x[a + 1] if a + 1 < length else 0.0
+    _cfft(zr, zi, rev, tables)
+    out_re[0] = zr[0] + zi[0]
+    out_im[0] = 0.0
+    out_re[m] = zr[0] - zi[0]
+    out_im[m] = 0.0
+    for k in range(1, m):
+        ar = zr[k]
+        ai = zi[k]
+        br = zr[m - k]
+        bi = -zi[m - k]
+        dr = 0.5 * (ar - br)
+        di = 0.5 * (ai - bi)
+        wr = tables[2, k]
+        wi = tables[3, k]
+        # X[k] = (Z[k] + conj Z[m-k]) / 2 - 1j W^k (Z[k] - conj Z[m-k]) / 2
+        out_re[k] = 0.5 * (ar + br) + dr * wi + di * wr
+        out_im[k] = 0.5 * (ai + bi) - (dr * wr - di * wi)
+
+
+@njit(cache=True)
+def _irfft(x_re, x_im, out, zr, zi, rev, tables):  # pragma: no cover - numba
+    """Inverse real FFT (as ``np.fft.irfft``) of bins 0..n/2 into ``out`` [shape=(n,)]."""
+    m = zr.size
+    for k in range(m):
+        ar = x_re[k]
+        ai = x_im[k]
+        br = x_re[m - k]
+        bi = -x_im[m - k]
+        # E = (X[k] + conj X[m-k]) / 2, O = (X[k] - conj X[m-k]) / (2 W^k), Z = E + 1j O;
+        # conjugated for an inverse through the forward transform.
+        dr = 0.5 * (ar - br)
+        di = 0.5 * (ai - bi)
+        wr = tables[2, k]
+        wi = -tables[3, k]
+        o_r = dr * wr - di * wi
+        o_i = dr * wi + di * wr
+        zr[k] = 0.5 * (ar + br) - o_i
+        zi[k] = -(0.5 * (ai + bi) + o_r)
+    _cfft(zr, zi, rev, tables)
+    scale = 1.0 / m
+    for i in range(m):
+        out[2 * i] = zr[i] * scale
+        out[2 * i + 1] = -zi[i] * scale
+
+
+@njit(cache=True)
+def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs, norm, work,
+                 halves, slot, use_ring, rev, tables, frame_rev, frame_tables,
+                 out):  # pragma: no cover - numba
+    """One hop of :class:`StreamingFeatures`: shift ``hop`` into ``buf``, features into ``out``.
+
+    The buffer's spectrum is that of its zero-padded halves, ``X[f] = A[f] + (-1)**f B[f]``;
+    ``B`` (the newest half) is computed and kept in ``halves[slot]``, which held the spectrum
+    of the half that has since become the first one when ``use_ring`` (every push since was
+    one hop and the half is a whole number of hops), else ``A`` is computed too.
+
+    ``work`` rows: 0-1 buffer spectrum, 2-3 first-half spectrum, 4-5 complex FFT scratch,
+    6 magnitude, 7 cross-correlation, 8 energy, 9 CMND, 10 windowed frame.
+    """
+    w = buf.size
+    k = hop.size
+    if k >= w:
+        for i in range(w):
+            buf[i] = hop[k - w + i]
+    else:
+        for i in range(w - k):
+            buf[i] = buf[i + k]
+        for i in range(k):
+            buf[w - k + i] = hop[i]
+    n_frame = window.size
+    m = w // 2
+    half = n_frame // 2
+    x_re = work[0]
+    x_im = work[1]
+    h_re = work[2]
+    h_im = work[3]
+    zr = work[4, :m]
+    zi = work[5, :m]
+    mag = work[6, :half + 1]
+    pitched = np.isfinite(expected_f0) and expected_f0 > 0.0
+    silent = True
+    if pitched:
+        for i in range(w):
+            if buf[i] != 0.0:
+                silent = False
+                break
+    p_re = halves[slot, 0]
+    p_im = halves[slot, 1]
+    need_x = w == n_frame or (pitched and not silent)
+    if need_x:
+        if use_ring:
+            for i in range(m + 1):
+                h_re[i] = p_re[i]
+                h_im[i] = p_im[i]
         else:
-            out[7] = 0.0
-            out[8] = 1.0
-        return out.copy()
+            _rfft(buf, m, h_re, h_im, zr, zi, rev, tables)
+    _rfft(buf[m:], m, p_re, p_im, zr, zi, rev, tables)
+    if need_x:
+        for i in range(0, m + 1, 2):
+            x_re[i] = h_re[i] + p_re[i]
+            x_im[i] = h_im[i] + p_im[i]
+        for i in range(1, m + 1, 2):
+            x_re[i] = h_re[i] - p_re[i]
+            x_im[i] = h_im[i] - p_im[i]
+    if w == n_frame:
+        for i in range(half + 1):
+            lo = i - 1 if i > 0 else 1
+            hi = i + 1 if i < half else half - 1
+            s_lo = -1.0 if i == 0 else 1.0
+            s_hi = -1.0 if i == half else 1.0
+            re = 0.5 * x_re[i] - 0.25 * (x_re[lo] + x_re[hi])
+            im = 0.5 * x_im[i] - 0.25 * (s_lo * x_im[lo] + s_hi * x_im[hi])
+            mag[i] = np.sqrt(re * re + im * im)
+    else:
+        frame = work[10, :n_frame]
+        for i in range(n_frame):
+            frame[i] = buf[w - n_frame + i] * window[i]
+        f_re = work[7, :half + 1]
+        f_im = work[8, :half + 1]
+        _rfft(frame, n_frame, f_re, f_im, work[4, :half], work[5, :half], frame_rev,
+              frame_tables)
+        for i in range(half + 1):
+            mag[i] = np.sqrt(f_re[i] * f_re[i] + f_im[i] * f_im[i])
+    _spectral_kernel(buf[w - n_frame:], mag, freqs, norm, has_previous, out)
+    if not pitched or silent:
+        out[7] = 0.0
+        out[8] = 1.0
+        return
+    for i in range(m + 1):
+        # X conj(A)
+        a = x_re[i] * h_re[i] + x_im[i] * h_im[i]
+        b = x_im[i] * h_re[i] - x_re[i] * h_im[i]
+        h_re[i] = a
+        h_im[i] = b
+    cross = work[7, :w]
+    _irfft(h_re, h_im, cross, zr, zi, rev, tables)
+    pitch, aper = _yin_kernel(buf, cross, expected_f0, sample_rate, work[8, :w + 1],
+                              work[9, :m + 1])
+    diff = 0.0
+    if np.isfinite(pitch) and pitch > 0.0:
+        diff = 12.0 * np.log2(pitch / expected_f0)
+    out[7] = min(max(diff, -PITCH_CLIP), PITCH_CLIP)
+    out[8] = aper
 
 
 @njit(cache=True)
@@ -312,6 +569,7 @@ def _spectral_kernel(frame, mag, freqs, norm, has_previous, out):  # pragma: no 
     peak = 0.0
     log_power = 0.0
     power_sum = 0.0
+    product = 1.0
     for i in range(n):
         m = mag[i]
         total += m
@@ -320,8 +578,15 @@ def _spectral_kernel(frame, mag, freqs, norm, has_previous, out):  # pragma: no 
         if m > peak:
             peak = m
         p = max(m * m, 1e-10)
-        log_power += np.log(p)
+        # One log per product of 16 powers instead of 16 logs: each power is in
+        # [1e-10, 2.7e5] for audio within +-1 (|X| <= sum of the window = 512), so the
+        # product neither under- nor overflows (up to audio of ~1e6).
+        product *= p
+        if i % 16 == 15:
+            log_power += np.log(product)
+            product = 1.0
         power_sum += p
+    log_power += np.log(product)
     centroid = weighted / total if total > 0 else 0.0
     threshold = 0.85 * total
     cum = 0.0
@@ -359,7 +624,7 @@ def _spectral_kernel(frame, mag, freqs, norm, has_previous, out):  # pragma: no 
 
 
 @njit(cache=True)
-def _yin_kernel(x, cross, expected_f0, sample_rate):  # pragma: no cover - numba
+def _yin_kernel(x, cross, expected_f0, sample_rate, energy, cmnd):  # pragma: no cover - numba
     """YIN pitch (Hz) and aperiodicity of one frame from its FFT cross-correlation.
 
     The same steps as :func:`yin` for one row: difference function, cumulative-mean
@@ -368,20 +633,21 @@ def _yin_kernel(x, cross, expected_f0, sample_rate):  # pragma: no cover - numba
     """
     w = x.size
     max_lag = w // 2
-    energy = np.empty(w + 1)
+    lo = int(min(max(np.floor(sample_rate / (2.0 * expected_f0)), 2), max_lag - 2))
+    hi = int(min(max(np.ceil(sample_rate / (0.5 * expected_f0)), 3), max_lag - 1))
+    # Only lags up to hi + 1 are read below (the cumulative mean runs from lag 1 as in
+    # the full-range computation, so these values are the same).
+    top = min(hi + 1, max_lag)
     energy[0] = 0.0
-    for i in range(w):
+    for i in range(top + max_lag):
         energy[i + 1] = energy[i] + x[i] * x[i]
     e_head = energy[max_lag]
-    cmnd = np.empty(max_lag + 1)
     cmnd[0] = 1.0
     cum = 0.0
-    for tau in range(1, max_lag + 1):
+    for tau in range(1, top + 1):
         d = max(e_head + energy[tau + max_lag] - energy[tau] - 2.0 * cross[tau], 0.0)
         cum += d
         cmnd[tau] = d * tau / max(cum, 1e-10)
-    lo = int(min(max(np.floor(sample_rate / (2.0 * expected_f0)), 2), max_lag - 2))
-    hi = int(min(max(np.ceil(sample_rate / (0.5 * expected_f0)), 3), max_lag - 1))
     first = -1
     arg = lo
     for lag in range(lo, hi + 1):
