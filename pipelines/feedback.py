@@ -127,8 +127,8 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
                     skill: int = 3, seed: int = 0, sample_rate: int = 44100,
                     transpose_octaves: bool = False, warp=None,
                     rng: np.random.Generator | None = None,
-                    settings: ControllerSettings | None = None,
-                    ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame, Performance]:
+                    settings: ControllerSettings | None = None, diagnostics: bool = True,
+                    ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame | None, Performance]:
     """Play one part with the rules' bowing and the listening controller's force.
 
     Parameters
@@ -155,14 +155,18 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
         Source of the rules' skill jitter (as in :func:`pipelines.render.render`).
     settings : ControllerSettings, optional
         Tuning of the control law (default :class:`ControllerSettings`).
+    diagnostics : bool
+        Record the instrument's contact diagnostics (for the evaluation; the controller
+        never reads them).
 
     Returns
     -------
     audio : np.ndarray [shape=(n,)], float32
     actions : pandas.DataFrame
         Actions table of what was played (one frame per hop per string in use).
-    diagnostics : pandas.DataFrame
-        Contact diagnostics per hop per string (table ``CONTACT_DIAGNOSTICS``).
+    diagnostics : pandas.DataFrame or None
+        Contact diagnostics per hop per string (table ``CONTACT_DIAGNOSTICS``), None when
+        not recorded.
     performance : Performance
         The rules' plan (events, warnings) the controller followed.
     """
@@ -183,11 +187,12 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     models = load_models(models_dir, name)
     inst = Instrument(name, sample_rate=sample_rate, seed=seed)
     log = perform(plan, models, inst, rng=np.random.default_rng([seed, 1]),
-                  settings=settings, record_diagnostics=True)
-    tail = inst.process(int(TAIL * sample_rate), {}).audio
+                  settings=settings, record_diagnostics=diagnostics)
+    tail = inst.process(int(TAIL * sample_rate), {}, diagnostics=False).audio
     audio = np.concatenate([log.audio, tail]).astype(np.float32)
     actions = played_actions(perf, plan, span, log, sample_rate=sample_rate)
-    return audio, actions, diagnostics_table(log, sample_rate), perf
+    table = diagnostics_table(log, sample_rate) if diagnostics else None
+    return audio, actions, table, perf
 
 
 def played_actions(perf: Performance, plan: HopPlan, span: np.ndarray, log: PerformanceLog, *,

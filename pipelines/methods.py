@@ -100,8 +100,7 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
     transpose_octaves : bool
         Fold out-of-range notes by octaves.
     diagnostics : bool
-        Record the instrument's per-hop contact diagnostics (the feedback loop always
-        records them).
+        Record the instrument's per-hop contact diagnostics.
     progress : bool, optional
         Progress bars.
 
@@ -142,7 +141,7 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
             y, actions, diag, perf = render_feedback(
                 part, config, models_dir=models, instrument=name, skill=skill, seed=seed,
                 sample_rate=sample_rate, transpose_octaves=transpose_octaves, warp=warp,
-                rng=rng)
+                rng=rng, diagnostics=diagnostics)
             out.append(PartOutput(index, str(part["part_name"].iloc[0]), name, y, actions,
                                   perf.events, diag, part, perf.warnings))
     else:

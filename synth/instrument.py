@@ -236,7 +236,8 @@ class Instrument:
             Strings plucked at the start of this block.
         diagnostics : bool
             Compute the contact diagnostics (False leaves ``Block.diagnostics`` empty and
-            saves their cost when nobody reads them).
+            saves their cost when nobody reads them; the onset trackers then skip the
+            block, so ask for them on every block of a stretch that needs them).
 
         Returns
         -------

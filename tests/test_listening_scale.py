@@ -27,9 +27,6 @@ def feedback_share(mf_models_dir, scale):  # noqa: F811
     return piece["sustained_class3_share"]
 
 
-@pytest.mark.xfail(strict=False, reason="the tests' TINY training (4 pairs, small searches) "
-                   "reaches 75 %; full training reaches 90.5 % on the 30 s bench scale "
-                   "(bench/feedback_speed.py; rules' force table 94 %)")
 def test_scale_under_feedback_is_class_3_on_nine_tenths_of_sustained_hops(feedback_share):
     assert feedback_share >= 0.9
 

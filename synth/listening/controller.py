@@ -324,7 +324,8 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
             force_log[i] = force
             vel_log[i] = v
         plucks = plan.plucks[k] if plan.plucks else ()
-        block = instrument.process(HOP, controls, plucks=plucks)
+        block = instrument.process(HOP, controls, plucks=plucks,
+                                   diagnostics=record_diagnostics)
         if record_diagnostics:
             for s, d in block.diagnostics.items():
                 diag[s].append((k, d))
