@@ -1,13 +1,14 @@
 """Acceptance: a two-octave scale under feedback control sounds right (issue 4, item 7)."""
 
 import pytest
-from _listening import mf_models_dir, models_dir  # noqa: F401
+from _listening import MF_PAIRS, mf_models_dir, models_dir  # noqa: F401
 
 from pipelines.evaluate import evaluate
 from pipelines.feedback import render_feedback, scale_notes
 from pipelines.rules import perform_part
 from pipelines.rules_config import load_config
 from synth import render_with_diagnostics
+from synth.listening.classifier import load_pair
 
 CFG = load_config()
 
@@ -38,3 +39,13 @@ def test_scale_under_feedback_beats_wrong_fixed_forces(feedback_share, scale, fo
     audio, diagnostics = render_with_diagnostics(wrong, instrument="violin", seed=0)
     theirs = evaluate(audio, wrong, diagnostics=diagnostics)["piece"]["sustained_class3_share"]
     assert feedback_share > theirs + 0.5, (force, feedback_share, theirs)
+
+
+@pytest.mark.xfail(strict=False, reason="by-clip 10-fold CV accuracy: G and D mf 0.97-0.98, A and "
+                   "E mf 0.94-0.95 with the tests' training (full training: 13 of 16 violin "
+                   "pairs >= 0.95, the others 0.936-0.947); the misses are whole clips next "
+                   "to the teacher's class thresholds. Issue 4 target: every pair >= 0.95")
+def test_cv_accuracy_by_clip_of_every_mf_pair_reaches_the_target(mf_models_dir):  # noqa: F811
+    accuracy = {s: load_pair(mf_models_dir, "violin", s, d).metadata["cv_accuracy"]
+                for s, d in MF_PAIRS}
+    assert min(accuracy.values()) >= 0.95, accuracy
