@@ -24,6 +24,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from synth.listening.numba_fft import irfft, rfft, rfft_tables
+
 WINDOW = 1024
 HOP = 256
 ROLL_PERCENT = 0.85
@@ -229,9 +231,9 @@ class StreamingFeatures:
     ``yin_window / 2 / HOP`` hops ago it gives the buffer's spectrum, and that the windowed
     frame's when the YIN buffer is one WINDOW long: the periodic Hann window is a 3-tap
     filter in frequency), one inverse FFT for YIN's autocorrelation (radix-2 FFTs in numba,
-    :func:`_cfft`), then the spectral and YIN features. Pushes of other sizes than HOP work
-    too (an extra FFT until the kept spectra line up again). Window, tables and buffers
-    are allocated once.
+    :mod:`synth.listening.numba_fft`), then the spectral and YIN features. Pushes of other
+    sizes than HOP work too (an extra FFT until the kept spectra line up again). Window,
+    tables and buffers are allocated once.
 
     Parameters
     ----------
@@ -253,8 +255,8 @@ class StreamingFeatures:
         self._max_lag = self.yin_window // 2
         # Circular correlation of the buffer with its first half (zero-padded) has no
         # wrap-around for lags <= yin_window / 2, so an FFT of the buffer's length suffices.
-        self._rev, self._tables = _rfft_tables(self.yin_window)
-        self._frame_rev, self._frame_tables = _rfft_tables(WINDOW)
+        self._rev, self._tables = rfft_tables(self.yin_window)
+        self._frame_rev, self._frame_tables = rfft_tables(WINDOW)
         self._work = np.zeros((_WORK_ROWS, self.yin_window + 2))
         self._out = np.zeros(len(FEATURE_NAMES))
         # Spectra of the buffer's newest half over the last pushes: with pushes of one HOP
@@ -309,152 +311,6 @@ class StreamingFeatures:
 _WORK_ROWS = 11
 
 
-def _rfft_tables(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Tables of a real FFT of ``n`` samples (a power of two) through a complex FFT of n/2.
-
-    Parameters
-    ----------
-    n : int
-        Real FFT length (power of two, >= 4).
-
-    Returns
-    -------
-    rev : np.ndarray [shape=(n // 2,)], int64
-        Bit-reversal permutation of the complex FFT.
-    tables : np.ndarray [shape=(4, n // 2 + 1)]
-        Rows: real and imaginary parts of the per-stage twiddles of the complex FFT (the
-        stage of half-length h at ``h - 1 .. 2h - 2``), then of ``exp(-2 pi i k / n)`` for
-        ``k = 0 .. n/2`` (the real-FFT split).
-    """
-    m = n // 2
-    bits = m.bit_length() - 1
-    idx = np.arange(m)
-    rev = np.zeros(m, np.int64)
-    for b in range(bits):
-        rev |= ((idx >> b) & 1) << (bits - 1 - b)
-    tables = np.zeros((4, m + 1))
-    h = 1
-    while h < m:
-        tw = np.exp(-2j * np.pi * np.arange(h) / (2 * h))
-        tables[0, h - 1:2 * h - 1] = tw.real
-        tables[1, h - 1:2 * h - 1] = tw.imag
-        h *= 2
-    split = np.exp(-2j * np.pi * np.arange(m + 1) / n)
-    tables[2] = split.real
-    tables[3] = split.imag
-    return rev, tables
-
-
-@njit(cache=True)
-def _cfft(re, im, rev, tables):  # pragma: no cover - numba
-    """In-place radix-2 complex FFT (decimation in time) of ``re + 1j * im`` [shape=(m,)]."""
-    m = re.size
-    for i in range(m):
-        j = rev[i]
-        if j > i:
-            re[i], re[j] = re[j], re[i]
-            im[i], im[j] = im[j], im[i]
-    if m < 4:
-        for s in range(0, m, 2):
-            ar = re[s]
-            ai = im[s]
-            br = re[s + 1]
-            bi = im[s + 1]
-            re[s] = ar + br
-            im[s] = ai + bi
-            re[s + 1] = ar - br
-            im[s + 1] = ai - bi
-        return
-    # The first two stages as one radix-4 pass (twiddles 1 and -1j: no multiplications).
-    for s in range(0, m, 4):
-        r0 = re[s] + re[s + 1]
-        i0 = im[s] + im[s + 1]
-        r1 = re[s] - re[s + 1]
-        i1 = im[s] - im[s + 1]
-        r2 = re[s + 2] + re[s + 3]
-        i2 = im[s + 2] + im[s + 3]
-        r3 = re[s + 2] - re[s + 3]
-        i3 = im[s + 2] - im[s + 3]
-        re[s] = r0 + r2
-        im[s] = i0 + i2
-        re[s + 2] = r0 - r2
-        im[s + 2] = i0 - i2
-        re[s + 1] = r1 + i3
-        im[s + 1] = i1 - r3
-        re[s + 3] = r1 - i3
-        im[s + 3] = i1 + r3
-    h = 4
-    while h < m:
-        wr = tables[0, h - 1:2 * h - 1]
-        wi = tables[1, h - 1:2 * h - 1]
-        for s in range(0, m, 2 * h):
-            lr = re[s:s + h]
-            li = im[s:s + h]
-            hr = re[s + h:s + 2 * h]
-            hi = im[s + h:s + 2 * h]
-            for j in range(h):
-                xr = hr[j] * wr[j] - hi[j] * wi[j]
-                xi = hr[j] * wi[j] + hi[j] * wr[j]
-                hr[j] = lr[j] - xr
-                hi[j] = li[j] - xi
-                lr[j] += xr
-                li[j] += xi
-        h *= 2
-
-
-@njit(cache=True)
-def _rfft(x, length, out_re, out_im, zr, zi, rev, tables):  # pragma: no cover - numba
-    """Real FFT of ``x[:length]`` zero-padded to ``n = 2 * zr.size``: bins 0..n/2 in ``out_*``."""
-    m = zr.size
-    for i in range(m):
-        a = 2 * i
-        zr[i] = x[a] if a < length else 0.0
-        zi[i] = x[a + 1] if a + 1 < length else 0.0
-    _cfft(zr, zi, rev, tables)
-    out_re[0] = zr[0] + zi[0]
-    out_im[0] = 0.0
-    out_re[m] = zr[0] - zi[0]
-    out_im[m] = 0.0
-    for k in range(1, m):
-        ar = zr[k]
-        ai = zi[k]
-        br = zr[m - k]
-        bi = -zi[m - k]
-        dr = 0.5 * (ar - br)
-        di = 0.5 * (ai - bi)
-        wr = tables[2, k]
-        wi = tables[3, k]
-        # X[k] = (Z[k] + conj Z[m-k]) / 2 - 1j W^k (Z[k] - conj Z[m-k]) / 2
-        out_re[k] = 0.5 * (ar + br) + dr * wi + di * wr
-        out_im[k] = 0.5 * (ai + bi) - (dr * wr - di * wi)
-
-
-@njit(cache=True)
-def _irfft(x_re, x_im, out, zr, zi, rev, tables):  # pragma: no cover - numba
-    """Inverse real FFT (as ``np.fft.irfft``) of bins 0..n/2 into ``out`` [shape=(n,)]."""
-    m = zr.size
-    for k in range(m):
-        ar = x_re[k]
-        ai = x_im[k]
-        br = x_re[m - k]
-        bi = -x_im[m - k]
-        # E = (X[k] + conj X[m-k]) / 2, O = (X[k] - conj X[m-k]) / (2 W^k), Z = E + 1j O;
-        # conjugated for an inverse through the forward transform.
-        dr = 0.5 * (ar - br)
-        di = 0.5 * (ai - bi)
-        wr = tables[2, k]
-        wi = -tables[3, k]
-        o_r = dr * wr - di * wi
-        o_i = dr * wi + di * wr
-        zr[k] = 0.5 * (ar + br) - o_i
-        zi[k] = -(0.5 * (ai + bi) + o_r)
-    _cfft(zr, zi, rev, tables)
-    scale = 1.0 / m
-    for i in range(m):
-        out[2 * i] = zr[i] * scale
-        out[2 * i + 1] = -zi[i] * scale
-
-
 @njit(cache=True)
 def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs, norm, work,
                  halves, slot, use_ring, rev, tables, frame_rev, frame_tables,
@@ -505,8 +361,8 @@ def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs
                 h_re[i] = p_re[i]
                 h_im[i] = p_im[i]
         else:
-            _rfft(buf, m, h_re, h_im, zr, zi, rev, tables)
-    _rfft(buf[m:], m, p_re, p_im, zr, zi, rev, tables)
+            rfft(buf, m, h_re, h_im, zr, zi, rev, tables)
+    rfft(buf[m:], m, p_re, p_im, zr, zi, rev, tables)
     if need_x:
         for i in range(0, m + 1, 2):
             x_re[i] = h_re[i] + p_re[i]
@@ -529,7 +385,7 @@ def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs
             frame[i] = buf[w - n_frame + i] * window[i]
         f_re = work[7, :half + 1]
         f_im = work[8, :half + 1]
-        _rfft(frame, n_frame, f_re, f_im, work[4, :half], work[5, :half], frame_rev,
+        rfft(frame, n_frame, f_re, f_im, work[4, :half], work[5, :half], frame_rev,
               frame_tables)
         for i in range(half + 1):
             mag[i] = np.sqrt(f_re[i] * f_re[i] + f_im[i] * f_im[i])
@@ -545,7 +401,7 @@ def _push_kernel(buf, hop, expected_f0, sample_rate, has_previous, window, freqs
         h_re[i] = a
         h_im[i] = b
     cross = work[7, :w]
-    _irfft(h_re, h_im, cross, zr, zi, rev, tables)
+    irfft(h_re, h_im, cross, zr, zi, rev, tables)
     pitch, aper = _yin_kernel(buf, cross, expected_f0, sample_rate, work[8, :w + 1],
                               work[9, :m + 1])
     diff = 0.0
