@@ -44,12 +44,13 @@ def sample_bowing(frame_time, frame_velocity, frame_force, first_sample, sample_
         v0, f0 = frame_velocity[j], frame_force[j]
         dv = (frame_velocity[j + 1] - v0) / span if n_frames > 1 else 0.0
         df = (frame_force[j + 1] - f0) / span if n_frames > 1 else 0.0
+        start = (first_sample + i) * period - t0
+        for k in range(end - i):  # loop counter from 0, no int-to-float per sample
+            dt = start + k * period
+            out_velocity[i + k] = v0 + dv * dt
+            out_force[i + k] = f0 + df * dt
         for k in range(i, end):
-            dt = (first_sample + k) * period - t0
-            force = f0 + df * dt
-            out_velocity[k] = v0 + dv * dt
-            out_force[k] = force
-            out_mode[k] = MODE_BOW if force > 0.0 else MODE_LIFTED
+            out_mode[k] = MODE_BOW if out_force[k] > 0.0 else MODE_LIFTED
         i = end
     for k in range(last, n):
         out_velocity[k] = frame_velocity[n_frames - 1]

@@ -47,16 +47,18 @@ class _StringTrack:
     pluck_forces: np.ndarray
 
     @classmethod
-    def from_rows(cls, rows: pd.DataFrame) -> _StringTrack:
-        time = rows["time"].to_numpy(np.float64).copy()
+    def from_columns(cls, columns: dict[str, np.ndarray]) -> _StringTrack:
+        """Build from one string's rows, given as arrays per column (in time order)."""
+        time = columns["time"].astype(np.float64)  # a copy: nudged below
         # Rows at a repeated time are a step: nudge them apart by a nanosecond (far below a
         # sample) so that linear interpolation takes the later row from that time on.
         for i in np.flatnonzero(np.diff(time) <= 0.0) + 1:
             time[i] = max(time[i], time[i - 1] + _STEP)
-        return cls(time, *(rows[c].to_numpy(np.float64) for c in
+        pluck = columns["pluck"].astype(bool)
+        return cls(time, *(columns[c].astype(np.float64) for c in
                            ("bow_velocity", "bow_force", "beta", "finger_ratio")),
-                   rows.loc[rows["pluck"], "time"].to_numpy(np.float64),
-                   rows.loc[rows["pluck"], "bow_force"].to_numpy(np.float64))
+                   columns["time"][pluck].astype(np.float64),
+                   columns["bow_force"][pluck].astype(np.float64))
 
     def sample(self, column: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Linear interpolation of ``column`` at times ``t`` (held beyond the ends)."""
@@ -149,8 +151,13 @@ def render_with_diagnostics(
         row = int(np.flatnonzero(strings >= inst.n_strings)[0])
         raise ParameterError(f"actions: column 'string', row {row}: the {inst.name} has "
                              f"strings 0..{inst.n_strings - 1}")
-    tracks = {int(s): _StringTrack.from_rows(rows)
-              for s, rows in actions.groupby("string", sort=True)}
+    columns = {c: actions[c].to_numpy() for c in ("time", "bow_velocity", "bow_force",
+                                                  "beta", "finger_ratio", "pluck")}
+    order = np.argsort(strings, kind="stable")  # rows of each string, in table order
+    tracks = {}
+    for s in np.unique(strings):
+        rows = order[strings[order] == s]
+        tracks[int(s)] = _StringTrack.from_columns({c: v[rows] for c, v in columns.items()})
     end = (float(actions["time"].max()) if len(actions) else 0.0) + tail
     n_total = int(np.ceil(end * inst.sample_rate / SUB_BLOCK)) * SUB_BLOCK
     hop = DIAGNOSTICS_HOP if diagnostics else None
