@@ -90,6 +90,7 @@ def render_actions(
     seed: int = 0,
     oversample: int | None = None,
     body: str | os.PathLike | np.ndarray | None = "synthesized",
+    body_seed: int = 0,
     tail: float = DEFAULT_TAIL,
     progress: bool = False,
 ) -> np.ndarray:
@@ -106,6 +107,8 @@ def render_actions(
         Seed of the friction noise; the same actions and seed give identical audio.
     oversample : {1, 2, 4}, optional
     body : "synthesized", path-like, np.ndarray or None
+    body_seed : int
+        Which synthesized body (see :class:`synth.Instrument`).
     tail : float, s
         Ring-out rendered after the last row.
     progress : bool
@@ -116,8 +119,9 @@ def render_actions(
     np.ndarray [shape=(n,)], float32
     """
     return render_with_diagnostics(actions, instrument=instrument, sample_rate=sample_rate,
-                                   seed=seed, oversample=oversample, body=body, tail=tail,
-                                   progress=progress, diagnostics=False)[0]
+                                   seed=seed, oversample=oversample, body=body,
+                                   body_seed=body_seed, tail=tail, progress=progress,
+                                   diagnostics=False)[0]
 
 
 def render_with_diagnostics(
@@ -128,6 +132,7 @@ def render_with_diagnostics(
     seed: int = 0,
     oversample: int | None = None,
     body: str | os.PathLike | np.ndarray | None = "synthesized",
+    body_seed: int = 0,
     tail: float = DEFAULT_TAIL,
     progress: bool = False,
     diagnostics: bool = True,
@@ -145,7 +150,8 @@ def render_with_diagnostics(
 
     actions = validate_actions(actions)
     inst = instrument if isinstance(instrument, Instrument) else Instrument(
-        instrument, sample_rate=sample_rate, seed=seed, oversample=oversample, body=body)
+        instrument, sample_rate=sample_rate, seed=seed, oversample=oversample, body=body,
+        body_seed=body_seed)
     strings = actions["string"].to_numpy()
     if np.any(strings >= inst.n_strings):
         row = int(np.flatnonzero(strings >= inst.n_strings)[0])

@@ -71,3 +71,12 @@ def test_mixed_block_sizes_equal_full_convolution():
         out.append(conv.process(x[i:i + n]))
         i += n
     np.testing.assert_allclose(np.concatenate(out), np.convolve(x, ir)[: x.size], atol=1e-9)
+
+
+def test_the_body_belongs_to_the_instrument_not_to_the_performance_seed():
+    from synth import Instrument
+
+    a, b = Instrument("violin", seed=1), Instrument("violin", seed=2)
+    np.testing.assert_array_equal(a.body_response, b.body_response)
+    other = Instrument("violin", seed=1, body_seed=3)
+    assert not np.array_equal(a.body_response, other.body_response)

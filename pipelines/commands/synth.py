@@ -26,6 +26,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="internal oversampling (default 2)")
     p.add_argument("--body", default="synthesized",
                    help="'synthesized' (default), 'none', or a WAV impulse response")
+    p.add_argument("--body-seed", type=int, default=0,
+                   help="which synthesized body (an instrument keeps its body across seeds)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -38,6 +40,7 @@ def run(args: argparse.Namespace) -> int:
     body = None if args.body == "none" else args.body
     audio = render_actions(actions, instrument=args.instrument, sample_rate=args.sample_rate,
                            seed=args.seed, oversample=args.oversample, body=body,
+                           body_seed=args.body_seed,
                            progress=not args.quiet and sys.stderr.isatty())
     write_audio(args.output, audio, args.sample_rate)
     print(f"wrote {args.output} ({audio.size / args.sample_rate:.2f} s, {args.instrument})")
