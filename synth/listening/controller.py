@@ -258,28 +258,10 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     diag: dict[int, list] = {s: [] for s in range(n_strings)} if record_diagnostics else {}
     features: dict[int, np.ndarray | None] = {}
     jitter = (settings or ControllerSettings()).jitter
-    # Flat Python lists of the plan, entry k * n_strings + s (per-hop numpy scalar reads cost
-    # more than the work; flat lists hold no per-row containers for the garbage collector).
-    hop_of, string_of = np.nonzero(plan.bowed)
-    first_bowed = np.searchsorted(hop_of, np.arange(n + 1)).tolist()
-    bowed_strings = string_of.tolist()
-    velocity = plan.velocity.ravel().tolist()
-    beta = plan.beta.ravel().tolist()
-    semitones = plan.semitones.ravel().tolist()
-    expected_f0 = plan.expected_f0.ravel().tolist()
-    target_speed = plan.target_speed.ravel().tolist()
-    dynamic = plan.dynamic.ravel().tolist()
-    note_start = plan.note_start.ravel().tolist()
-    finger_change = plan.finger_change.ravel().tolist()
+    (first_bowed, bowed_strings, velocity, beta, semitones, expected_f0, target_speed,
+     dynamic, note_start, finger_change) = _flat_plan(plan)
     planned = planned_force.ravel().tolist() if planned_force is not None else None
-    # The jitter's standard normal draws, pre-drawn in the order the hop loop uses them (per
-    # hop, per bowed string: the force's in ForceController.step, then the velocity's): the
-    # same numbers as drawing one at a time, and the generator ends in the same state.
-    steps = plan.bowed & ~plan.note_start
-    if planned_force is None:
-        steps &= ~plan.finger_change
-    n_draws = int(plan.bowed.sum() + steps.sum()) if jitter else 0
-    noise = rng.standard_normal(n_draws).tolist() if n_draws else []
+    noise = _jitter_draws(plan, rng, jitter, planned_force is not None)
     draw = 0
     model_of: dict[tuple[int, str], PairModel] = {}
     for k in range(n):
@@ -344,6 +326,40 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     return PerformanceLog(audio, np.array(force_log, np.float64).reshape(shape),
                           np.array(vel_log, np.float64).reshape(shape),
                           np.array(classes, np.int64).reshape(shape), diag)
+
+
+def _flat_plan(plan: HopPlan) -> tuple[list, ...]:
+    """The plan as flat Python lists, entry ``k * n_strings + s``.
+
+    Per-hop numpy scalar reads cost more than the work; flat lists hold no per-row
+    containers for the garbage collector. Returns (first entry of each hop in the
+    bowed-string list, bowed strings hop by hop, velocity, beta, semitones, expected f0,
+    target speed, dynamic, note start, finger change).
+    """
+    hop_of, string_of = np.nonzero(plan.bowed)
+    first_bowed = np.searchsorted(hop_of, np.arange(plan.bowed.shape[0] + 1)).tolist()
+    return (first_bowed, string_of.tolist(),
+            *(a.ravel().tolist() for a in (plan.velocity, plan.beta, plan.semitones,
+                                           plan.expected_f0, plan.target_speed, plan.dynamic,
+                                           plan.note_start, plan.finger_change)))
+
+
+def _jitter_draws(plan: HopPlan, rng: np.random.Generator, jitter: float,
+                  corrects_planned_force: bool) -> list[float]:
+    """The jitter's standard normal draws, in the order the hop loop uses them.
+
+    Per hop, per bowed string: the force's (in :meth:`ForceController.step`, on hops that
+    are neither a note start nor, under feedback control, a finger change), then the
+    velocity's. The same numbers as drawing one at a time; the generator ends in the same
+    state.
+    """
+    if not jitter:
+        return []
+    steps = plan.bowed & ~plan.note_start
+    if not corrects_planned_force:
+        steps &= ~plan.finger_change
+    n_draws = int(plan.bowed.sum() + steps.sum())
+    return rng.standard_normal(n_draws).tolist() if n_draws else []
 
 
 def _model_for(models: dict[tuple[int, str], PairModel], string: int, dynamic: str) -> PairModel:
