@@ -62,7 +62,7 @@ def main() -> None:
     # Warm-up as in synth_speed: a short render loads the models (scikit-learn) and the
     # numba caches, which a session pays once.
     render_feedback(notes.iloc[:2], cfg, models_dir=models, instrument="violin", seed=0)
-    (audio, actions, _, _), render_s = timed(False)  # what `arco render -o x.wav` does
+    (audio, _, _, _), render_s = timed(False)  # what `arco render -o x.wav` does
     (with_diag, actions, diag, _), diag_s = timed(True)  # + the evaluation's diagnostics
     if not np.array_equal(with_diag, audio):
         raise RuntimeError("the feedback render is not deterministic")

@@ -40,12 +40,13 @@ def sample_bowing(frame_time, frame_velocity, frame_force, first_sample, sample_
         end = last if j >= n_frames - 2 else min(
             max(math.ceil(frame_time[j + 1] * sample_rate) - first_sample, i + 1), last)
         t0 = frame_time[j]
-        span = frame_time[j + 1] - t0 if n_frames > 1 else 1.0
+        after = min(j + 1, n_frames - 1)  # a single frame is its own segment, held
+        span = frame_time[after] - t0
         v0, f0 = frame_velocity[j], frame_force[j]
-        dv = (frame_velocity[j + 1] - v0) / span if n_frames > 1 else 0.0
-        df = (frame_force[j + 1] - f0) / span if n_frames > 1 else 0.0
+        dv = (frame_velocity[after] - v0) / span if span > 0.0 else 0.0
+        df = (frame_force[after] - f0) / span if span > 0.0 else 0.0
         start = (first_sample + i) * period - t0
-        for k in range(end - i):  # loop counter from 0, no int-to-float per sample
+        for k in range(end - i):
             dt = start + k * period
             out_velocity[i + k] = v0 + dv * dt
             out_force[i + k] = f0 + df * dt

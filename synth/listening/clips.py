@@ -150,9 +150,13 @@ def auto_label(clip: Clip, *, thresholds: TeacherThresholds | None = None) -> in
                             f0=spec.nominal_frequency(), duration=n / clip.sample_rate,
                             sample_rate=clip.sample_rate,
                             reference_rms=reference_rms(spec.instrument, clip.sample_rate))
+    return judge(stats, force_ratio=_force_ratio(spec), thresholds=thresholds)
+
+
+def _force_ratio(spec: ClipSpec) -> float:
+    """Bow force over the string's reference force for the clip's bowing."""
     string_ref = load_instrument(spec.instrument).strings[spec.string].reference_force
-    ratio = spec.bow_force / reference_force(string_ref, spec.bow_velocity, spec.beta)
-    return judge(stats, force_ratio=ratio, thresholds=thresholds)
+    return spec.bow_force / reference_force(string_ref, spec.bow_velocity, spec.beta)
 
 
 def recorded_frame_ends(clip: Clip) -> np.ndarray:
@@ -189,15 +193,14 @@ def auto_hop_labels(clip: Clip, *, window_hops: int = 8,
     start = clip.audio.size - n_rec
     f0 = spec.nominal_frequency()
     ref_rms = reference_rms(spec.instrument, sr)
-    string_ref = load_instrument(spec.instrument).strings[spec.string].reference_force
-    ratio = spec.bow_force / reference_force(string_ref, spec.bow_velocity, spec.beta)
+    ratio = _force_ratio(spec)
     width = min(window_hops * HOP, n_rec)
+    t = clip.onset_times - clip.start_time  # onsets on the recorded part's clock
     out = []
     for end in recorded_frame_ends(clip):
         b = min(int(end) - start, n_rec)
         a = max(b - width, 0)
         b = a + width
-        t = clip.onset_times - clip.start_time
         onsets = clip.onset_times[(t >= a / sr) & (t < b / sr)]
         stats = clip_statistics(onsets, clip.bridge_force[a:b], audio[a:b], f0=f0,
                                 duration=(b - a) / sr, sample_rate=sr, reference_rms=ref_rms)
