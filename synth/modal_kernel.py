@@ -40,8 +40,9 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     force), ``friction`` = (mu_s, mu_d, v0 m/s, noise depth), ``finger_spring`` = (K N/m,
     R N s/m). Writes bridge force (N), slip velocity (m/s) and contact state per sample.
     ``noise`` holds uniform draws of friction noise, consumed one per slipping sample in
-    sample order from ``noise_used[0]`` on (updated in place; the caller keeps at least
-    ``bow_velocity.size`` unused), so a seed fixes the sound.
+    sample order from ``noise_used[0]`` on (updated in place), so a seed fixes the sound.
+    The kernel stops before a sample when no draw is left and returns how many samples it
+    advanced; the caller refills ``noise`` and calls again with the rest.
     """
     modal_a = modal_state[0]
     modal_v = modal_state[1]
@@ -61,7 +62,12 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     admittance = h_bb + h_bf * q
     inverse_admittance = 1.0 / admittance
     next_noise = noise_used[0]
+    n_noise = noise.size
+    done = bow_velocity.size
     for t in range(bow_velocity.size):
+        if next_noise >= n_noise:
+            done = t
+            break
         v_bow_point = 0.0
         bridge = 0.0
         p = 0.0
@@ -120,6 +126,7 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     last_forces[0] = f_bow
     last_forces[1] = f_finger
     noise_used[0] = next_noise
+    return done
 
 
 def empty_outputs(n_samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

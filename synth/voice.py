@@ -98,17 +98,14 @@ class StringVoice:
             self._cache[key] = hit
         return hit
 
-    def _reserve_noise(self, n: int) -> None:
-        """Keep at least ``n`` unused friction-noise draws (one per slipping sample).
+    def _refill_noise(self) -> None:
+        """Replace the used-up friction noise with the next :data:`NOISE_BLOCK` draws.
 
-        Draws come from ``rng`` in blocks but are used in stream order, so the sound does
-        not depend on how a run is split into calls.
+        The kernel uses one draw per slipping sample, in stream order, and stops when none
+        is left; refilling then and only then draws no more than the sound uses, and the
+        sound does not depend on how a run is split into calls.
         """
-        used = int(self._noise_used[0])
-        if self._noise.size - used >= n:
-            return
-        fresh = self.rng.random(max(NOISE_BLOCK, n - (self._noise.size - used)))
-        self._noise = np.concatenate([self._noise[used:], fresh])
+        self._noise = self.rng.random(NOISE_BLOCK)
         self._noise_used[0] = 0
 
     def advance(self, bow_velocity: np.ndarray, bow_force: np.ndarray, contact_mode: np.ndarray,
@@ -133,10 +130,16 @@ class StringVoice:
             return
         self.excited = True
         packed, gains, fingered = self.coefficients(beta, finger_ratio)
-        self._reserve_noise(bow_velocity.size)
-        advance_string(self.state, self.last_forces, packed, gains, self.finger_spring,
-                       self.friction, fingered, bow_velocity, bow_force, contact_mode,
-                       self._noise, self._noise_used, out.bridge_force, out.slip_velocity,
-                       out.contact)
+        n = bow_velocity.size
+        done = 0
+        while True:
+            done += advance_string(self.state, self.last_forces, packed, gains,
+                                   self.finger_spring, self.friction, fingered,
+                                   bow_velocity[done:], bow_force[done:], contact_mode[done:],
+                                   self._noise, self._noise_used, out.bridge_force[done:],
+                                   out.slip_velocity[done:], out.contact[done:])
+            if done == n:
+                break
+            self._refill_noise()
         if not contact_mode[-1] and np.abs(self.state[0]).max() < SILENT_AMPLITUDE:
             self.reset()  # rung out: stop simulating until touched again

@@ -106,3 +106,38 @@ def test_voice_output_does_not_depend_on_how_a_run_is_split():
         return out.bridge_force
 
     np.testing.assert_array_equal(run([0, n]), run([0, 513, 70_001, 70_002, n]))
+
+
+def test_kernel_stops_when_its_friction_noise_is_used_up_and_resumes_exactly():
+    """One draw per slipping sample; with none left the kernel returns before the sample."""
+    string = load_instrument("violin").strings[1]
+    basis = mode_basis(string, 88200.0, max_frequency=20000.0)
+    contact = contact_coefficients(basis, 0.1, 0.0)
+    packed = pack_coefficients(basis, contact)
+    friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
+    spring = np.array([string.finger_stiffness, string.finger_damping])
+    velocity, force = np.full(N, 0.3), np.full(N, string.reference_force)
+    mode = np.ones(N, np.int8)
+    draws = np.random.default_rng(2).random(N)
+
+    def run(noise_blocks):
+        state, forces, out = np.zeros((2, basis.n_modes)), np.zeros(2), empty_outputs(N)
+        done, calls = 0, 0
+        for noise in noise_blocks:
+            used = np.zeros(1, np.int64)
+            done += advance_string(state, forces, packed, contact.gains, spring, friction,
+                                   False, velocity[done:], force[done:], mode[done:], noise,
+                                   used, *(o[done:] for o in out))
+            calls += 1
+            assert used[0] == noise.size or done == N
+            if done == N:
+                break
+        return done, calls, out
+
+    done, _, whole = run([draws])
+    slips = int(np.count_nonzero(whole[2] == 2))
+    assert done == N and 0 < slips < N
+    done, calls, pieces = run([draws[i:i + 7] for i in range(0, N, 7)])
+    assert done == N and calls == -(-slips // 7) + (slips % 7 == 0)
+    for a, b in zip(whole, pieces, strict=True):
+        np.testing.assert_array_equal(a, b)
