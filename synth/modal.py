@@ -183,9 +183,10 @@ def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float) -> 
 
 #: The kernel's arrays start on this boundary (bytes) and hold a multiple of
 #: MODE_PADDING modes, so every row is aligned for 256-bit vector loads (misaligned rows
-#: measured up to a third slower).
+#: measured up to a third slower) and the kernel's mode loop, which LLVM unrolls by two
+#: vectors, has no scalar remainder.
 ALIGNMENT = 64
-MODE_PADDING = 4
+MODE_PADDING = 8
 
 
 def padded_modes(n_modes: int) -> int:
@@ -201,18 +202,46 @@ def aligned_zeros(shape: tuple[int, ...]) -> np.ndarray:
     return buffer[offset:offset + size].reshape(shape)
 
 
-def pack_coefficients(basis: ModeBasis, contact: ContactCoefficients) -> np.ndarray:
-    """Stack the per-mode coefficients in the row order the kernel reads.
+def state_scale(basis: ModeBasis) -> np.ndarray:
+    """Scale from a mode's (displacement m, velocity m/s) to the kernel's state (N, N).
+
+    The kernel keeps each mode as (A, W) = (B a, B c_av v), B the mode's bridge gain (N/m)
+    and c_av the free step's displacement gain per velocity (s): A is the mode's share of
+    the bridge force, read by a plain sum, and the free step becomes A' = c_aa A + W,
+    W' = c_av c_va A + c_vv W, three multiplies instead of four (see
+    :func:`pack_coefficients`).
 
     Returns
     -------
-    np.ndarray [shape=(11, padded_modes(n_modes))]
-        Rows: free step (4), bow push (2), finger push (2), bow shape, finger shape, bridge
-        gain; aligned, with zero coefficients for the padding modes (they never move).
+    np.ndarray [shape=(2, n_modes)]
     """
+    c_av = basis.free[1]
+    return np.stack([basis.bridge_gain, basis.bridge_gain * c_av])
+
+
+def pack_coefficients(basis: ModeBasis, contact: ContactCoefficients) -> np.ndarray:
+    """The per-mode coefficients in the kernel's state coordinates and row order.
+
+    With the state (A, W) of :func:`state_scale`, one sample is
+    A' = c_aa A + W + P_Ab F_b + P_Af F_f and W' = c_WA A + c_vv W + P_Wb F_b + P_Wf F_f;
+    the bridge force is the sum of A', the bow-point velocity sum(S_b W') and the finger's
+    displacement and velocity sum(S_fA A') and sum(S_fW W').
+
+    Returns
+    -------
+    np.ndarray [shape=(10, padded_modes(n_modes))]
+        Rows: c_aa, c_WA, c_vv; P_Ab, P_Wb, P_Af, P_Wf (N per N of contact force); S_b
+        (m/s per N), S_fA (m per N), S_fW (m/s per N). Aligned, with zero coefficients for
+        the padding modes (they never move).
+    """
+    c_aa, c_av, c_va, c_vv = basis.free
+    scale_a, scale_w = state_scale(basis)
     rows = np.vstack([
-        basis.free, contact.push_bow, contact.push_finger,
-        contact.shape_bow[None], contact.shape_finger[None], basis.bridge_gain[None],
+        c_aa, c_av * c_va, c_vv,
+        scale_a * contact.push_bow[0], scale_w * contact.push_bow[1],
+        scale_a * contact.push_finger[0], scale_w * contact.push_finger[1],
+        contact.shape_bow / scale_w, contact.shape_finger / scale_a,
+        contact.shape_finger / scale_w,
     ])
     packed = aligned_zeros((rows.shape[0], padded_modes(basis.n_modes)))
     packed[:, :basis.n_modes] = rows

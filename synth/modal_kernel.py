@@ -21,9 +21,10 @@ MODE_LIFTED, MODE_BOW, MODE_GRIP = 0, 1, 2
 _FAST = {"reassoc", "contract", "nsz", "arcp"}
 
 
-# Rows of the packed per-mode coefficient array (:func:`synth.modal.pack_coefficients`):
-# free step a<-a, a<-v, v<-a, v<-v; bow push into a, v; finger push into a, v; bow shape;
-# finger shape; bridge gain.
+# Rows of the packed per-mode coefficient array (:func:`synth.modal.pack_coefficients`), in
+# the state coordinates of :func:`synth.modal.state_scale`: free step c_aa, c_WA, c_vv; bow
+# push into A, W; finger push into A, W; bow-point velocity per W; finger displacement per
+# A and velocity per W. The bridge force is the plain sum of A.
 
 
 @njit(cache=True, fastmath=_FAST, error_model="numpy")
@@ -32,10 +33,11 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
                    out_bridge, out_slip_velocity, out_contact):  # pragma: no cover - numba
     """Advance one string by ``bow_velocity.size`` samples; see :mod:`synth.modal`.
 
-    ``modal_state`` [shape=(2, n_modes)] holds modal displacements (m) and velocities (m/s)
-    and ``last_forces`` the bow and finger forces (N) of the previous sample; both are
-    updated in place. The states exclude ``last_forces``, which the next free step folds in
-    through the push rows of ``coefficients`` [shape=(11, n_modes)].
+    ``modal_state`` [shape=(2, n_modes)] holds each mode's (A, W) = (B a, B c_av v), N
+    (:func:`synth.modal.state_scale`), and ``last_forces`` the bow and finger forces (N)
+    of the previous sample; both are updated in place. The states exclude ``last_forces``,
+    which the next free step folds in through the push rows of ``coefficients``
+    [shape=(10, n_modes)].
     ``gains`` = (H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge per bow force, bridge per finger
     force), ``friction`` = (mu_s, mu_d, v0 m/s, noise depth), ``finger_spring`` = (K N/m,
     R N s/m). Writes bridge force (N), slip velocity (m/s) and contact state per sample.
@@ -45,11 +47,11 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     advanced; the caller refills ``noise`` and calls again with the rest.
     """
     modal_a = modal_state[0]
-    modal_v = modal_state[1]
+    modal_w = modal_state[1]
     n_modes = modal_a.size
-    c_aa, c_av, c_va, c_vv = coefficients[0], coefficients[1], coefficients[2], coefficients[3]
-    pa_b, pv_b, pa_f, pv_f = coefficients[4], coefficients[5], coefficients[6], coefficients[7]
-    shape_b, shape_f, bridge_gain = coefficients[8], coefficients[9], coefficients[10]
+    c_aa, c_wa, c_ww = coefficients[0], coefficients[1], coefficients[2]
+    pa_b, pw_b, pa_f, pw_f = coefficients[3], coefficients[4], coefficients[5], coefficients[6]
+    read_b, read_fa, read_fw = coefficients[7], coefficients[8], coefficients[9]
     h_bb, h_bf, g_ff, g_fb, h_ff, h_fb, br_b, br_f = (
         gains[0], gains[1], gains[2], gains[3], gains[4], gains[5], gains[6], gains[7])
     stiffness, damping = finger_spring[0], finger_spring[1]
@@ -76,26 +78,26 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
             v_finger = 0.0
             for n in range(n_modes):
                 a = modal_a[n]
-                v = modal_v[n]
-                a_new = c_aa[n] * a + c_av[n] * v + pa_b[n] * f_bow + pa_f[n] * f_finger
-                v_new = c_va[n] * a + c_vv[n] * v + pv_b[n] * f_bow + pv_f[n] * f_finger
+                w = modal_w[n]
+                a_new = c_aa[n] * a + w + pa_b[n] * f_bow + pa_f[n] * f_finger
+                w_new = c_wa[n] * a + c_ww[n] * w + pw_b[n] * f_bow + pw_f[n] * f_finger
                 modal_a[n] = a_new
-                modal_v[n] = v_new
-                v_bow_point += shape_b[n] * v_new
-                y_finger += shape_f[n] * a_new
-                v_finger += shape_f[n] * v_new
-                bridge += bridge_gain[n] * a_new
+                modal_w[n] = w_new
+                v_bow_point += read_b[n] * w_new
+                y_finger += read_fa[n] * a_new
+                v_finger += read_fw[n] * w_new
+                bridge += a_new
             p = -(stiffness * y_finger + damping * v_finger) * finger_gain
         else:
             for n in range(n_modes):
                 a = modal_a[n]
-                v = modal_v[n]
-                a_new = c_aa[n] * a + c_av[n] * v + pa_b[n] * f_bow
-                v_new = c_va[n] * a + c_vv[n] * v + pv_b[n] * f_bow
+                w = modal_w[n]
+                a_new = c_aa[n] * a + w + pa_b[n] * f_bow
+                w_new = c_wa[n] * a + c_ww[n] * w + pw_b[n] * f_bow
                 modal_a[n] = a_new
-                modal_v[n] = v_new
-                v_bow_point += shape_b[n] * v_new
-                bridge += bridge_gain[n] * a_new
+                modal_w[n] = w_new
+                v_bow_point += read_b[n] * w_new
+                bridge += a_new
         v_free = v_bow_point + h_bf * p
         mode = contact_mode[t]
         slip = 0.0

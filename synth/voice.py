@@ -13,6 +13,7 @@ from synth.modal import (
     mode_basis,
     pack_coefficients,
     padded_modes,
+    state_scale,
 )
 from synth.modal_kernel import advance_string
 from synth.strings import StringConstants
@@ -71,6 +72,9 @@ class StringVoice:
                                            max_frequency=max_mode_frequency)
         self.rng = rng
         self.state = aligned_zeros((2, padded_modes(self.basis.n_modes)))
+        # The kernel keeps A = bridge gain x displacement; silence is judged on displacement.
+        self._silent_level = np.full(self.state.shape[1], np.inf)
+        self._silent_level[:self.basis.n_modes] = SILENT_AMPLITUDE * state_scale(self.basis)[0]
         self.last_forces = np.zeros(2)
         self.friction = np.array([string.mu_s, string.mu_d, string.v0, friction_noise])
         self.finger_spring = np.array([string.finger_stiffness, string.finger_damping])
@@ -141,5 +145,5 @@ class StringVoice:
             if done == n:
                 break
             self._refill_noise()
-        if not contact_mode[-1] and np.abs(self.state[0]).max() < SILENT_AMPLITUDE:
+        if not contact_mode[-1] and np.all(np.abs(self.state[0]) < self._silent_level):
             self.reset()  # rung out: stop simulating until touched again
