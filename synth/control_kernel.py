@@ -45,18 +45,29 @@ def sample_bowing(frame_time, frame_velocity, frame_force, first_sample, sample_
         v0, f0 = frame_velocity[j], frame_force[j]
         dv = (frame_velocity[after] - v0) / span if span > 0.0 else 0.0
         df = (frame_force[after] - f0) / span if span > 0.0 else 0.0
-        start = (first_sample + i) * period - t0
-        for k in range(end - i):
-            dt = start + k * period
-            out_velocity[i + k] = v0 + dv * dt
-            out_force[i + k] = f0 + df * dt
-        for k in range(i, end):
-            out_mode[k] = MODE_BOW if out_force[k] > 0.0 else MODE_LIFTED
+        _fill_segment(out_velocity, out_force, out_mode, i, end,
+                      (first_sample + i) * period - t0, period, v0, dv, f0, df)
         i = end
     for k in range(last, n):
         out_velocity[k] = frame_velocity[n_frames - 1]
         out_force[k] = frame_force[n_frames - 1]
         out_mode[k] = MODE_LIFTED
+
+
+# "reassoc" only lets LLVM vectorise the float sample counter (whole numbers, so exact:
+# the values equal those of an integer counter converted per sample, at half the cost).
+@njit(cache=True, error_model="numpy", fastmath={"reassoc"})
+def _fill_segment(out_velocity, out_force, out_mode, i, end, start, period, v0, dv, f0,
+                  df):  # pragma: no cover - numba
+    """Samples ``i .. end`` of one segment: value + slope * (start + k period), k = 0, 1, ..."""
+    k = 0.0
+    for j in range(i, end):
+        dt = start + k * period
+        out_velocity[j] = v0 + dv * dt
+        out_force[j] = f0 + df * dt
+        k += 1.0
+    for j in range(i, end):
+        out_mode[j] = MODE_BOW if out_force[j] > 0.0 else MODE_LIFTED
 
 
 @njit(cache=True, error_model="numpy")
