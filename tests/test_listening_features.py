@@ -5,6 +5,8 @@ import pytest
 from synth.listening.features import (
     FEATURE_NAMES,
     HOP,
+    PITCH_FINE_CLIP,
+    RMS_SLOPE_HOPS,
     WINDOW,
     StreamingFeatures,
     batch_features,
@@ -108,4 +110,19 @@ def test_streaming_survives_pushes_of_other_sizes_and_resets(signal, yin_window)
             got[col("flux")] = want[col("flux")]
         else:
             got = b.push(hop, 293.66)
+        if any(0 <= i - split <= RMS_SLOPE_HOPS for split in (10, 11, 33)):
+            # ... and the level slope against the push RMS_SLOPE_HOPS pushes back.
+            got[col("rms_slope")] = want[col("rms_slope")]
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9, err_msg=f"hop {i}")
+
+
+def test_fine_pitch_and_level_slope_derive_from_the_frame_features(signal):
+    f = batch_features(signal * np.linspace(0.2, 1.0, signal.size), 300.0, sample_rate=SR)
+    np.testing.assert_array_equal(
+        f[:, col("pitch_fine")], np.clip(f[:, col("pitch_diff")], -PITCH_FINE_CLIP,
+                                         PITCH_FINE_CLIP))
+    k = np.arange(f.shape[0])
+    level = f[:, col("rms_db")]
+    np.testing.assert_allclose(f[:, col("rms_slope")],
+                               level - level[np.maximum(k - RMS_SLOPE_HOPS, 0)])
+    assert np.all(f[RMS_SLOPE_HOPS:, col("rms_slope")] > 0)  # a crescendo rises

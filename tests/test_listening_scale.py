@@ -41,10 +41,6 @@ def test_scale_under_feedback_beats_wrong_fixed_forces(feedback_share, scale, fo
     assert feedback_share > theirs + 0.5, (force, feedback_share, theirs)
 
 
-@pytest.mark.xfail(strict=False, reason="by-clip 10-fold CV accuracy: G and D mf 0.97-0.98, A and "
-                   "E mf 0.94-0.95 with the tests' training (full training: 12 of 16 violin "
-                   "pairs >= 0.95, the others 0.936-0.947); the misses are whole clips next "
-                   "to the teacher's class thresholds. Issue 4 target: every pair >= 0.95")
 def test_cv_accuracy_by_clip_of_every_mf_pair_reaches_the_target(mf_models_dir):  # noqa: F811
     accuracy = {s: load_pair(mf_models_dir, "violin", s, d).metadata["cv_accuracy"]
                 for s, d in MF_PAIRS}
