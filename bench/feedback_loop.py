@@ -47,8 +47,9 @@ def main() -> None:
     blocks: list = []
 
     class Recorder(Instrument):
-        def process(self, n_samples, controls, plucks=()):
-            block = super().process(n_samples, controls, plucks=plucks)
+        def process(self, n_samples, controls, plucks=(), diagnostics=True):
+            block = super().process(n_samples, controls, plucks=plucks,
+                                    diagnostics=diagnostics)
             blocks.append(SimpleNamespace(audio=np.array(block.audio),
                                           diagnostics=block.diagnostics))
             return block
@@ -59,7 +60,7 @@ def main() -> None:
         def __init__(self, blocks):
             self.blocks = iter(blocks)
 
-        def process(self, n_samples, controls, plucks=()):
+        def process(self, n_samples, controls, plucks=(), diagnostics=True):
             return next(self.blocks)
 
     def play(instrument):

@@ -303,10 +303,12 @@ class Instrument:
             if not track:
                 continue
             if hop:
-                per_hop[s] = self._track_hops(s, out, start, hop * self.oversample)
+                per_hop[s] = self._track_hops(s, out, given.bow_velocity, start,
+                                              hop * self.oversample)
                 diagnostics[s] = merge_diagnostics(per_hop[s])
             else:
-                diagnostics[s] = self._trackers[s].update(out.contact, out.slip_velocity, start)
+                diagnostics[s] = self._trackers[s].update(out.contact, out.slip_velocity,
+                                                          given.bow_velocity, start)
         bridge = self._decimator.process(np.zeros(n_internal) if total is None else total)
         audio = self._convolver.process(bridge) if self._convolver is not None else bridge
         self._sample += n_samples
@@ -322,10 +324,11 @@ class Instrument:
                 np.empty(n_internal), np.empty(n_internal), np.empty(n_internal, np.int8))
         return out
 
-    def _track_hops(self, s: int, out: StringOutput, start: int,
+    def _track_hops(self, s: int, out: StringOutput, bow_velocity: np.ndarray, start: int,
                     hop: int) -> list[ContactDiagnostics]:
         tracker = self._trackers[s]
-        return [tracker.update(out.contact[i:i + hop], out.slip_velocity[i:i + hop], start + i)
+        return [tracker.update(out.contact[i:i + hop], out.slip_velocity[i:i + hop],
+                               bow_velocity[i:i + hop], start + i)
                 for i in range(0, out.contact.size, hop)]
 
     def _lifted(self, s: int, n_samples: int) -> StringInput:

@@ -1,8 +1,13 @@
-"""Shared settings of the listening tests: tiny training grids."""
+"""Shared settings of the listening tests: the full training's clips, tiny K and force searches.
+
+The clips (settle, record, band clips, force grid) are those of the full training, so the
+classifiers' cross-validated accuracy is the one the full training reports for these pairs;
+only the K and initial-force searches are cut down.
+"""
 
 from synth.listening.training import TrainingSettings
 
-TINY = TrainingSettings(settle=0.5, record=0.3, band_clips=1, k_candidates=(1.005, 1.02),
+TINY = TrainingSettings(settle=0.7, record=0.3, band_clips=2, k_candidates=(1.005, 1.02),
                         k_repeats=1, k_note=0.5, f_candidates=4, f_rounds=1, f_repeats=1,
                         f_note=0.5)
 
