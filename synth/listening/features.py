@@ -40,8 +40,10 @@ PITCH_FINE_CLIP = 0.1
 RMS_SLOPE_HOPS = 7
 FEATURE_NAMES = ("zcr", "centroid", "rolloff", "flux", "crest", "flatness", "rms_db",
                  "pitch_diff", "aperiodicity", "pitch_fine", "rms_slope")
-#: Features computed per frame by the numba kernels; the rest derive from them.
-_KERNEL_FEATURES = 9
+#: Columns the streaming path reads or fills after its numba kernel (the last two derive
+#: from the kernel's rms_db and pitch_diff).
+_RMS_DB, _PITCH_DIFF = FEATURE_NAMES.index("rms_db"), FEATURE_NAMES.index("pitch_diff")
+_PITCH_FINE, _RMS_SLOPE = FEATURE_NAMES.index("pitch_fine"), FEATURE_NAMES.index("rms_slope")
 _AMIN = 1e-10
 _YIN_THRESHOLD = 0.15
 
@@ -322,12 +324,13 @@ class StreamingFeatures:
         self._slot = self._slot + 1 if self._slot + 1 < self._lag else 0
         self._has_previous = True
         out = self._out
-        out[_KERNEL_FEATURES] = min(max(out[7], -PITCH_FINE_CLIP), PITCH_FINE_CLIP)
+        out[_PITCH_FINE] = min(max(out[_PITCH_DIFF], -PITCH_FINE_CLIP), PITCH_FINE_CLIP)
+        level = out[_RMS_DB]
         if self.ready:
-            self._levels.append(out[6])
+            self._levels.append(level)
             if len(self._levels) > RMS_SLOPE_HOPS + 1:
                 del self._levels[0]
-        out[_KERNEL_FEATURES + 1] = out[6] - (self._levels[0] if self._levels else out[6])
+        out[_RMS_SLOPE] = level - (self._levels[0] if self._levels else level)
         return out.copy()
 
 
