@@ -200,9 +200,7 @@ class BlockConvolver:
         n_segments = -(-block.size // step)
         padded = np.zeros((n_segments - 1) * step + n_fft, np.float32)
         padded[:signal.size] = signal
-        segments = np.lib.stride_tricks.as_strided(
-            padded, (n_segments, n_fft), (step * padded.itemsize, padded.itemsize),
-            writeable=False)
+        segments = np.lib.stride_tricks.sliding_window_view(padded, n_fft)[::step]
         spectrum = self._spectra.get(n_fft)
         if spectrum is None:
             spectrum = self._spectra[n_fft] = scipy.fft.rfft(
