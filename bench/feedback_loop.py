@@ -27,9 +27,9 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
 
-    from pipelines.feedback import hop_plan, scale_notes
-    from pipelines.rules import fermata_warp, perform_part
-    from pipelines.rules_config import load_config
+    from pipelines.methods.feedback import hop_plan, scale_notes
+    from pipelines.perform.config import load_config
+    from pipelines.perform.rules import fermata_warp, perform_part
     from synth.instrument import Instrument
     from synth.listening import controller
     from synth.listening.classifier import load_models

@@ -31,11 +31,11 @@ def main() -> None:
     ap.add_argument("--models", default=None, help="model directory (default: a temp dir)")
     args = ap.parse_args()
 
-    from pipelines.evaluate import evaluate
-    from pipelines.feedback import render_feedback, scale_notes
-    from pipelines.rules import perform_part
-    from pipelines.rules_config import load_config
-    from pipelines.train import train_instrument
+    from pipelines.listening.evaluate import evaluate
+    from pipelines.listening.train import train_instrument
+    from pipelines.methods.feedback import render_feedback, scale_notes
+    from pipelines.perform.config import load_config
+    from pipelines.perform.rules import perform_part
     from synth import render_with_diagnostics
     from synth.listening.classifier import load_models
     from synth.listening.training import QUICK, TrainingSettings

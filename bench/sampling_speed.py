@@ -124,9 +124,9 @@ def main() -> None:
     if args.models:
         from importlib import resources
 
-        from pipelines.render import select_measures
-        from pipelines.sampling import open_database, render_sampling
+        from pipelines.methods.sampling import open_database, render_sampling
         from pipelines.score import read_score
+        from pipelines.score.select import select_measures
 
         notes = select_measures(read_score(str(resources.files("pipelines").joinpath(
             "data/mozart-k421.mxl"))), 1, 8)

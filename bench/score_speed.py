@@ -27,9 +27,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from pipelines.render import render  # noqa: E402
-from pipelines.rules import fermata_warp, perform_part  # noqa: E402
-from pipelines.rules_config import load_config  # noqa: E402
+from pipelines.methods.rules import render  # noqa: E402
+from pipelines.perform.config import load_config  # noqa: E402
+from pipelines.perform.rules import fermata_warp, perform_part  # noqa: E402
 from pipelines.score.musicxml import notes_from_music21, parse_musicxml  # noqa: E402
 
 

@@ -1,7 +1,7 @@
 """Tables of gesture sampling: the targets a score asks for and the samples chosen for them.
 
 - :data:`SAMPLING_TARGETS`: one row per bowed note of one part, written by
-  :mod:`pipelines.sampling` from the notes table (with the string, finger and bow direction
+  :mod:`pipelines.methods.sampling` from the notes table (with the string, finger and bow direction
   the rules chose) and read by :mod:`gesture_db.search` and :mod:`gesture_db.render`.
 - :data:`SAMPLE_CHOICES`: one row per target, the database note chosen by the search and its
   costs; written by :func:`gesture_db.search.search`, read by the rendering and the reports.

@@ -20,7 +20,7 @@ MF_PAIRS = [(s, "mf") for s in range(4)]
 @pytest.fixture(scope="session")
 def models_dir(tmp_path_factory):
     """Violin D-string mf pair trained with TINY grids (reused: training resumes)."""
-    from pipelines.train import train_instrument
+    from pipelines.listening.train import train_instrument
 
     out = tmp_path_factory.getbasetemp() / "listening-models"
     train_instrument("violin", out, pairs=[PAIR], settings=TINY, workers=1, progress=False)
@@ -30,7 +30,7 @@ def models_dir(tmp_path_factory):
 @pytest.fixture(scope="session")
 def mf_models_dir(models_dir):
     """All four violin mf pairs (TINY grids, two workers), beside the D-string pair."""
-    from pipelines.train import train_instrument
+    from pipelines.listening.train import train_instrument
 
     train_instrument("violin", models_dir, pairs=MF_PAIRS, settings=TINY, workers=2,
                      progress=False)
@@ -39,7 +39,7 @@ def mf_models_dir(models_dir):
 
 def d_string_notes():
     """D4 E4 F#4 G4 at mf, one second each: all on the D string."""
-    from pipelines.feedback import scale_notes
+    from pipelines.methods.feedback import scale_notes
 
     notes = scale_notes(tonic=62, octaves=1)
     return notes[notes["midi_pitch"] < 69].reset_index(drop=True)

@@ -3,7 +3,7 @@
 import numpy as np
 import soundfile as sf
 
-from pipelines.cli import main
+from pipelines.cli.main import main
 
 
 def test_demo_writes_audio_plots_and_report(tmp_path):

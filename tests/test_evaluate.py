@@ -7,9 +7,9 @@ import soundfile
 from data_schemas.actions import write_actions
 from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
 from data_schemas.io import write_table
-from pipelines.cli import main
-from pipelines.evaluate import evaluate, find_notes
-from pipelines.scale import scale_actions
+from pipelines.cli.main import main
+from pipelines.listening.evaluate import evaluate, find_notes
+from pipelines.perform.scale import scale_actions
 from synth import render_with_diagnostics
 
 PIECE_KEYS = {"notes", "helmholtz_share", "attack_ms_median", "attack_ms_p90",

@@ -3,7 +3,7 @@
 import argparse
 import json
 
-from pipelines.commands import build_db, db, simulate_recordings
+from pipelines.cli.commands import build_db, db, simulate_recordings
 
 
 def _main(argv):

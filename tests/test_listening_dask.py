@@ -1,7 +1,7 @@
 import pytest
 from _listening import TINY
 
-from pipelines.train import train_instrument
+from pipelines.listening.train import train_instrument
 from synth.listening.classifier import load_pair
 
 

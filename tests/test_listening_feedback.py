@@ -3,10 +3,10 @@ import pytest
 from _listening import d_string_notes, models_dir  # noqa: F401
 
 from data_schemas.actions import validate_actions
-from pipelines.evaluate import evaluate
-from pipelines.feedback import render_feedback
-from pipelines.rules import perform_part
-from pipelines.rules_config import load_config
+from pipelines.listening.evaluate import evaluate
+from pipelines.methods.feedback import render_feedback
+from pipelines.perform.config import load_config
+from pipelines.perform.rules import perform_part
 from synth import render_with_diagnostics
 
 CFG = load_config()

@@ -3,10 +3,10 @@
 import pytest
 from _listening import MF_PAIRS, mf_models_dir, models_dir  # noqa: F401
 
-from pipelines.evaluate import evaluate
-from pipelines.feedback import render_feedback, scale_notes
-from pipelines.rules import perform_part
-from pipelines.rules_config import load_config
+from pipelines.listening.evaluate import evaluate
+from pipelines.methods.feedback import render_feedback, scale_notes
+from pipelines.perform.config import load_config
+from pipelines.perform.rules import perform_part
 from synth import render_with_diagnostics
 from synth.listening.classifier import load_pair
 

@@ -5,8 +5,8 @@ import pytest
 from _listening import PAIR, TINY, models_dir  # noqa: F401
 
 from data_schemas import ArcoError
-from pipelines.cli import main
-from pipelines.train import train_instrument
+from pipelines.cli.main import main
+from pipelines.listening.train import train_instrument
 from synth.listening.classifier import ModelError, load_models, load_pair, pair_key
 from synth.listening.training import attack_cost, clip_features, stability_cost
 

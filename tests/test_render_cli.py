@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from _notation_score import write_score
 
-import pipelines.cli as cli
+import pipelines.cli.main as cli
 from data_schemas.actions import read_actions
 from data_schemas.notes import read_notes
 

@@ -8,8 +8,8 @@ import pytest
 from _notation_score import write_score
 
 from data_schemas.actions import validate_actions
-from pipelines.rules import perform_part, string_force_factors
-from pipelines.rules_config import dynamic_table, load_config
+from pipelines.perform.config import dynamic_table, load_config
+from pipelines.perform.rules import perform_part, string_force_factors
 from pipelines.score import read_score
 
 CFG = load_config()

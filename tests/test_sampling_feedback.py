@@ -8,7 +8,7 @@ from test_sampling_render import tiny_db  # noqa: F401
 
 @pytest.fixture(scope="module")
 def played(tiny_db, models_dir):  # noqa: F811
-    from pipelines.sampling import open_database, render_sampling
+    from pipelines.methods.sampling import open_database, render_sampling
 
     sdb = open_database(tiny_db / "db")
     notes = d_string_notes()

@@ -136,13 +136,13 @@ def test_rendering_a_take_from_its_own_database_reproduces_it(tiny_db):
 
 @pytest.fixture(scope="module")
 def scale():
-    from pipelines.feedback import scale_notes
+    from pipelines.methods.feedback import scale_notes
 
     return scale_notes(tonic=62, octaves=1, tempo=120.0)
 
 
 def test_render_sampling_open_loop(tiny_db, scale):
-    from pipelines.sampling import open_database, render_sampling
+    from pipelines.methods.sampling import open_database, render_sampling
 
     sdb = open_database(tiny_db / "db")
     result = render_sampling(scale, db=sdb, feedback=False, progress=False, diagnostics=True)
@@ -157,14 +157,14 @@ def test_render_sampling_open_loop(tiny_db, scale):
 
 
 def test_missing_database_is_a_clear_error(tmp_path, scale):
-    from pipelines.sampling import render_sampling
+    from pipelines.methods.sampling import render_sampling
 
     with pytest.raises(SchemaError, match="no gesture database"):
         render_sampling(scale, db=tmp_path / "nowhere", audio=False)
 
 
 def test_database_of_another_schema_version_is_a_clear_error(tiny_db, tmp_path, scale):
-    from pipelines.sampling import render_sampling
+    from pipelines.methods.sampling import render_sampling
 
     old = tmp_path / "old"
     shutil.copytree(tiny_db / "db", old)
@@ -197,7 +197,7 @@ def test_score_whose_groups_are_all_empty_is_a_clear_error(tiny_db):
 def test_arco_compare_writes_the_report(tiny_db, tmp_path, capsys):
     from importlib import resources
 
-    from pipelines.cli import main
+    from pipelines.cli.main import main
 
     score = str(resources.files("pipelines").joinpath("data/mozart-k421.mxl"))
     out = tmp_path / "report"
@@ -223,7 +223,7 @@ def test_arco_compare_writes_the_report(tiny_db, tmp_path, capsys):
 def test_arco_compare_errors_are_one_line(tmp_path, capsys, args, message):
     from importlib import resources
 
-    from pipelines.cli import main
+    from pipelines.cli.main import main
 
     score = str(resources.files("pipelines").joinpath("data/mozart-k421.mxl"))
     args = [a.replace("NOWHERE", str(tmp_path / "nowhere")) for a in args]

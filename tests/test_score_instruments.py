@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipelines.instruments import (
+from pipelines.perform.instruments import (
     INSTRUMENTS,
     choose_strings,
     finger_ratio,

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipelines.rules import perform_part
-from pipelines.rules_config import load_config
+from pipelines.perform.config import load_config
+from pipelines.perform.rules import perform_part
 from pipelines.score.musicxml import notes_from_music21, parse_musicxml
 
 #: The three smallest files of the corpus (music21 parses ~1,000 notes/s).

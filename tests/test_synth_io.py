@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from data_schemas import SchemaError, validate_actions, write_actions
-from pipelines.cli import main
+from pipelines.cli.main import main
 from synth import BowControl, Instrument, render_actions
 
 
@@ -35,7 +35,7 @@ def test_same_actions_and_seed_give_bit_identical_wav(tmp_path):
     paths = [tmp_path / f"{k}.wav" for k in "abc"]
     for path, seed in zip(paths, (7, 7, 8), strict=True):
         # Separate processes, a second apart: no state and no time stamp may leak into files.
-        run = subprocess.run([sys.executable, "-m", "pipelines.cli", "synth", str(actions),
+        run = subprocess.run([sys.executable, "-m", "pipelines.cli.main", "synth", str(actions),
                               "-o", str(path), "--seed", str(seed), "--quiet"],
                              capture_output=True, text=True)
         assert run.returncode == 0, run.stderr

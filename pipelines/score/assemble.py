@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.notes import ARTICULATIONS, NOTES, validate_notes
-from pipelines.instruments import get_instrument, guess_instrument
+from pipelines.perform.instruments import get_instrument, guess_instrument
 from pipelines.score.errors import ScoreError
 from pipelines.score.tempo import TempoMap
 from pipelines.score.text import classify

@@ -117,7 +117,7 @@ def evaluate(audio: np.ndarray, actions: pd.DataFrame, *, sample_rate: int = 441
         else "audio-only estimates"
     lanes = None
     if score is not None:
-        from pipelines.rules_config import dynamic_table, load_config
+        from pipelines.perform.config import dynamic_table, load_config
 
         cfg = config or load_config()
         lanes = (score["onset"].to_numpy(np.float64), score["dynamic"].to_numpy(np.float64),
@@ -147,7 +147,7 @@ def evaluate(audio: np.ndarray, actions: pd.DataFrame, *, sample_rate: int = 441
         results.append(_note_figures(note, stats_by_string[int(note.string)], actions,
                                      consts.strings[int(note.string)].reference_force,
                                      sample_rate, lanes))
-    return {"measured_from": source, "piece": _piece(results), "notes": results}
+    return {"measured_from": source, "piece": piece_figures(results), "notes": results}
 
 
 def _helmholtz(st: RegimeStatistics) -> bool:
@@ -205,7 +205,8 @@ def _note_figures(note, stats: list[RegimeStatistics], actions: pd.DataFrame,
     }
 
 
-def _piece(notes: list[dict[str, Any]]) -> dict[str, Any]:
+def piece_figures(notes: list[dict[str, Any]]) -> dict[str, Any]:
+    """Summarise per-note figures (the ``notes`` list of :func:`evaluate`) for the piece."""
     def finite(key: str) -> np.ndarray:
         x = np.array([n[key] for n in notes], np.float64)
         return x[np.isfinite(x)]

@@ -37,7 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compare and print where the report is."""
-    from pipelines.compare import compare
+    from pipelines.reports.compare import compare
 
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]

@@ -1,6 +1,6 @@
 """``--method feedback``: the rules plan the bowing, the listening controller owns the force.
 
-The rules (:func:`pipelines.rules.perform_part`) choose string and finger from the pitch,
+The rules (:func:`pipelines.perform.rules.perform_part`) choose string and finger from the pitch,
 bow velocity and beta from the dynamic (the "bow lanes"), the bow direction and where the bow
 is lifted. :func:`hop_plan` samples that plan once per hop of 256 samples; the feedback loop
 (:func:`synth.listening.perform`) then plays it, choosing the bow force from what it hears
@@ -20,9 +20,10 @@ import pandas as pd
 from data_schemas.actions import validate_actions
 from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
 from data_schemas.errors import ParameterError
-from pipelines.instruments import get_instrument
-from pipelines.rules import Performance, fermata_warp, perform_part
-from pipelines.rules_config import dynamic_table
+from pipelines.perform.config import dynamic_table
+from pipelines.perform.events import Performance
+from pipelines.perform.instruments import get_instrument
+from pipelines.perform.rules import fermata_warp, perform_part
 from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog
 from synth.listening.features import HOP
 
@@ -150,9 +151,9 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     transpose_octaves : bool
         Fold out-of-range notes by octaves.
     warp : callable, optional
-        Shared fermata time map (see :func:`pipelines.rules.fermata_warp`).
+        Shared fermata time map (see :func:`pipelines.perform.rules.fermata_warp`).
     rng : numpy.random.Generator, optional
-        Source of the rules' skill jitter (as in :func:`pipelines.render.render`).
+        Source of the rules' skill jitter (as in :func:`pipelines.methods.rules.render`).
     settings : ControllerSettings, optional
         Tuning of the control law (default :class:`ControllerSettings`).
     diagnostics : bool

@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from pipelines.instruments import finger_ratio
-from pipelines.rules import Event
-from pipelines.rules_config import dynamic_table
+from pipelines.perform.config import dynamic_table
+from pipelines.perform.events import Event
+from pipelines.perform.instruments import finger_ratio
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
             "bow_position", "pluck")

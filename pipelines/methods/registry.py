@@ -108,12 +108,12 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
     -------
     MethodOutput
     """
-    from pipelines.render import mix
+    from pipelines.methods.result import mix
 
     start = time.perf_counter()
     out: list[PartOutput] = []
     if method == "rules":
-        from pipelines.render import render
+        from pipelines.methods.rules import render
         from synth import render_with_diagnostics
 
         res = render(notes, config, parts=parts, instrument=instrument, skill=skill, seed=seed,
@@ -128,8 +128,8 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
                                   notes[notes["part_index"] == p.part_index],
                                   p.performance.warnings))
     elif method == "feedback":
-        from pipelines.feedback import render_feedback
-        from pipelines.rules import fermata_warp
+        from pipelines.methods.feedback import render_feedback
+        from pipelines.perform.rules import fermata_warp
 
         if instrument is not None and len(parts) > 1:
             raise ParameterError("--instrument applies to a single part (drop --all-parts)")
@@ -145,7 +145,7 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
             out.append(PartOutput(index, str(part["part_name"].iloc[0]), name, y, actions,
                                   perf.events, diag, part, perf.warnings))
     else:
-        from pipelines.sampling import render_sampling
+        from pipelines.methods.sampling import render_sampling
 
         res = render_sampling(notes, db=database, models=models,
                               feedback=method == "sampling" and models is not None,

@@ -10,80 +10,24 @@ fermata (every part waits), grace notes, double stops, and a bow-length budget. 
 of bow velocity respects the maximum bow acceleration.
 
 The work is split in three steps: :func:`build_events` (notes -> timed events with strings,
-fingers, articulation), :mod:`pipelines.bowing` (events -> strokes with planned velocity and
-bow position) and :func:`pipelines.bowing.frames` (strokes -> control frames).
+fingers, articulation), :mod:`pipelines.perform.bowing` (events -> strokes with planned velocity and
+bow position) and :func:`pipelines.perform.bowing.frames` (strokes -> control frames).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from data_schemas.actions import ACTIONS, validate_actions
-from pipelines.instruments import choose_strings, fit_range, get_instrument
+from pipelines.perform.events import Event, Performance
+from pipelines.perform.instruments import choose_strings, fit_range, get_instrument
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
 _MIN_DURATION = 0.005  # s
-
-
-@dataclass
-class Event:
-    """Notes sounding together (one note, a double stop, a chord), with their articulation.
-
-    Times are performance times in seconds. ``strings``/``semitones`` are the sustained
-    strings; ``roll`` lists (string, semitones) of lower chord notes played briefly first.
-    """
-
-    rows: list[int]
-    t0: float
-    end: float
-    strings: list[int]
-    semitones: list[float]
-    dynamic: float
-    label: str
-    played_end: float = 0.0
-    next_t0: float = np.inf
-    dynamic_next: float | None = None
-    roll: list[tuple[int, float]] = field(default_factory=list)
-    pizz: bool = False
-    technique: str | None = None
-    region: str | None = None
-    mark: int = 0
-    cont: bool = False
-    stop: bool = False
-    accent: float = 1.0
-    breath: bool = False
-    lighten: bool = False
-    rest_after: bool = False
-    direction: int = 1
-    factor: float = 1.0
-    slur: float = np.nan
-    slur_position: str = "iso"
-    run_position: str = "iso"
-
-
-@dataclass
-class Performance:
-    """The rules' output for one part.
-
-    Attributes
-    ----------
-    actions : pandas.DataFrame
-        The actions table (see :data:`data_schemas.actions.ACTIONS`).
-    events : pandas.DataFrame
-        One row per played event: ``t0``, ``played_end``, ``end`` (s), ``label`` (note
-        names), ``direction`` (+1 down, -1 up, 0 pizz), ``string``, ``dynamic``.
-    warnings : list of str
-        Things the rules could not do as written (rolled chords, squeezed strokes).
-    """
-
-    actions: pd.DataFrame
-    events: pd.DataFrame
-    warnings: list[str]
 
 
 def string_force_factors(instrument: str) -> np.ndarray:
@@ -159,7 +103,7 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     notes : pandas.DataFrame
         Notes of one part (notes table), sorted by onset.
     strings : pandas.DataFrame
-        :func:`pipelines.instruments.choose_strings` output for ``notes``.
+        :func:`pipelines.perform.instruments.choose_strings` output for ``notes``.
     config : dict
         Rules configuration.
     warp : callable, optional
@@ -387,7 +331,7 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
     notes : pandas.DataFrame
         The part's notes in playing order, folded into range.
     strings : pandas.DataFrame
-        String and finger per note (:func:`pipelines.instruments.choose_strings`).
+        String and finger per note (:func:`pipelines.perform.instruments.choose_strings`).
     events : list of Event
         Played events (:func:`build_events`).
     """
@@ -414,7 +358,7 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
     notes : pandas.DataFrame
         Notes of one part (notes table).
     config : dict
-        Rules configuration (:func:`pipelines.rules_config.load_config`).
+        Rules configuration (:func:`pipelines.perform.config.load_config`).
     instrument : str, optional
         ``violin``, ``viola`` or ``cello``; default: the part's ``instrument`` column.
     skill : int
@@ -431,7 +375,7 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
     Performance
         The actions table, the played events and warnings.
     """
-    from pipelines import bowing
+    from pipelines.perform import bowing
 
     if skill not in (0, 1, 2, 3):
         from data_schemas.errors import ParameterError

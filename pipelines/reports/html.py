@@ -17,12 +17,7 @@ from typing import Any
 import pandas as pd
 
 from data_schemas.io import atomic_path
-
-
-def _figures():
-    from pipelines.compare import FIGURES
-
-    return FIGURES
+from pipelines.reports.figures import FIGURES
 
 
 def winners(results: dict[str, dict[str, dict[str, Any]]]) -> dict[str, dict[str, str]]:
@@ -31,7 +26,7 @@ def winners(results: dict[str, dict[str, dict[str, Any]]]) -> dict[str, dict[str
     stems = sorted({s for per in results.values() for s in per})
     for stem in stems:
         out[stem] = {}
-        for fig, larger in _figures().items():
+        for fig, larger in FIGURES.items():
             vals = {}
             for method, per in results.items():
                 v = per.get(stem, {}).get(fig)
@@ -107,7 +102,7 @@ def _fmt(v) -> str:
 def _html(results, media, methods) -> str:
     esc = html.escape
     win = winners(results)
-    figs = _figures()
+    figs = FIGURES
     stems = sorted({s for per in results.values() for s in per})
     out = ["<!doctype html><html><head><meta charset='utf-8'><title>Arco comparison</title>",
            "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"

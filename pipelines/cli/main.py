@@ -1,6 +1,6 @@
 """The ``arco`` command line: a thin dispatcher over one module per sub-command.
 
-Every sub-command lives in :mod:`pipelines.commands` and exposes ``register(subparsers)``,
+Every sub-command lives in :mod:`pipelines.cli.commands` and exposes ``register(subparsers)``,
 which adds its parser and sets ``func`` to a function taking the parsed arguments and
 returning an exit code. Errors Arco raises on purpose print one line and exit with 2.
 """
@@ -16,16 +16,16 @@ from data_schemas.errors import ArcoError
 
 #: Sub-command modules, in the order ``arco --help`` lists them.
 COMMAND_MODULES = (
-    "pipelines.commands.synth",
-    "pipelines.commands.demo",
-    "pipelines.commands.notes",
-    "pipelines.commands.render",
-    "pipelines.commands.simulate_recordings",
-    "pipelines.commands.build_db",
-    "pipelines.commands.db",
-    "pipelines.commands.train",
-    "pipelines.commands.evaluate",
-    "pipelines.commands.compare",
+    "pipelines.cli.commands.synth",
+    "pipelines.cli.commands.demo",
+    "pipelines.cli.commands.notes",
+    "pipelines.cli.commands.render",
+    "pipelines.cli.commands.simulate_recordings",
+    "pipelines.cli.commands.build_db",
+    "pipelines.cli.commands.db",
+    "pipelines.cli.commands.train",
+    "pipelines.cli.commands.evaluate",
+    "pipelines.cli.commands.compare",
 )
 
 EXIT_USAGE = 2

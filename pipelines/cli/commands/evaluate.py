@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from data_schemas.actions import read_actions
     from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
     from data_schemas.io import read_frame
-    from pipelines.evaluate import evaluate
+    from pipelines.listening.evaluate import evaluate
 
     try:
         audio, sr = soundfile.read(args.audio, dtype="float32")

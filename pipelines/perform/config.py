@@ -23,7 +23,7 @@ _N_LEVELS = 10
 @lru_cache(maxsize=1)
 def default_config() -> dict[str, Any]:
     """Return the shipped rules configuration (loaded once, validated)."""
-    text = resources.files("pipelines").joinpath("config/rules.toml").read_text("utf-8")
+    text = resources.files("pipelines").joinpath("perform/rules.toml").read_text("utf-8")
     config = tomllib.loads(text)
     validate_config(config, source="pipelines/config/rules.toml")
     return config

@@ -1,6 +1,6 @@
 """``--method sampling``: play a score with bowing gestures sampled from the gesture database.
 
-For each part the rules' front end (:func:`pipelines.rules.build_events`: range folding,
+For each part the rules' front end (:func:`pipelines.perform.rules.build_events`: range folding,
 string and finger choice, fermatas, slurs, bow directions, articulations) turns the notes
 into events; every bowed event becomes a sampling target (group = technique x direction x
 slur position x run position). The search (:mod:`gesture_db.search`) picks one database
@@ -29,8 +29,10 @@ from data_schemas.actions import ACTIONS
 from data_schemas.errors import ParameterError
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
-from pipelines.render import PartRender, RenderResult, choose_parts, mix
-from pipelines.rules import Event, Performance, fermata_warp
+from pipelines.methods.result import PartRender, RenderResult, mix
+from pipelines.perform.events import Event, Performance
+from pipelines.perform.rules import fermata_warp
+from pipelines.score.select import choose_parts
 
 #: Violin open-string length (m): effective string lengths are violin-equivalent.
 VIOLIN_STRING_LENGTH = 0.325
@@ -115,7 +117,7 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.Da
     Parameters
     ----------
     events : list of Event
-        :func:`pipelines.rules.build_events` output.
+        :func:`pipelines.perform.rules.build_events` output.
     notes : pandas.DataFrame
         The notes the events index (for pitches).
 
@@ -225,7 +227,7 @@ def adapt_forces(actions: pd.DataFrame, instrument: str,
     pandas.DataFrame
         A copy with rescaled ``bow_force`` (pluck rows untouched).
     """
-    from pipelines.rules import string_force_factors
+    from pipelines.perform.rules import string_force_factors
 
     recorded = float(search_config.get("render", {}).get("recorded_reference_force", 0.0))
     if recorded <= 0.0:
@@ -255,7 +257,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     """
     from gesture_db.render import render_samples
     from gesture_db.search import search
-    from pipelines.rules import prepare_events
+    from pipelines.perform.rules import prepare_events
 
     _name, notes, _strings, events = prepare_events(
         notes, config, instrument=instrument, rng=rng, warp=warp,
@@ -323,7 +325,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
     """
     from tqdm import tqdm
 
-    from pipelines.rules_config import load_config
+    from pipelines.perform.config import load_config
 
     if sample_rate <= 0:
         raise ParameterError(f"sample_rate={sample_rate} must be > 0")
@@ -373,7 +375,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     """Play sampled actions with the listening controller correcting the force hop by hop.
 
     The single integration point with :mod:`synth.listening.controller`: the hop plan of the
-    sampled actions comes from :func:`pipelines.feedback.hop_plan`; per string a
+    sampled actions comes from :func:`pipelines.methods.feedback.hop_plan`; per string a
     controller (:func:`synth.listening.controller.perform` with ``planned_force``, no range
     clamp) holds a correction factor that starts at 1 on every stroke and is multiplied by
     ``K**(3 - c_avg)`` from the classes it hears; the force played is the sampled force
@@ -387,8 +389,8 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     diagnostics : pandas.DataFrame
         Contact diagnostics per hop per string.
     """
-    from pipelines.feedback import TAIL, diagnostics_table, hop_plan, played_actions
-    from pipelines.rules_config import load_config
+    from pipelines.methods.feedback import TAIL, diagnostics_table, hop_plan, played_actions
+    from pipelines.perform.config import load_config
     from synth.instrument import Instrument
     from synth.listening.classifier import load_models
     from synth.listening.controller import ControllerSettings, perform

@@ -47,8 +47,8 @@ def _pairs(text: str | None) -> list[tuple[int, str]] | None:
 
 def run(args: argparse.Namespace) -> int:
     """Train and print one line per pair."""
-    from pipelines.rules_config import dynamic_table, load_config
-    from pipelines.train import train_instrument
+    from pipelines.listening.train import train_instrument
+    from pipelines.perform.config import dynamic_table, load_config
     from synth.listening.training import QUICK, TrainingSettings
 
     if args.workers is not None and args.workers < 1:

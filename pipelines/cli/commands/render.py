@@ -108,10 +108,10 @@ def _check(args: argparse.Namespace, method: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, play, write."""
-    from pipelines.methods import render_method
-    from pipelines.render import choose_parts, select_measures
-    from pipelines.rules_config import load_config
+    from pipelines.methods.registry import render_method
+    from pipelines.perform.config import load_config
     from pipelines.score import read_score
+    from pipelines.score.select import choose_parts, select_measures
 
     method = choose_method(args)
     _check(args, method)
@@ -121,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     parts = choose_parts(notes, args.part, args.all_parts)
     database = None
     if method == "sampling":
-        from pipelines.sampling import open_database
+        from pipelines.methods.sampling import open_database
 
         database = open_database(args.db)
     models = None if (method == "sampling" and args.no_feedback) else args.models
@@ -144,8 +144,8 @@ def _write(args: argparse.Namespace, output, variant: str, say) -> None:
     from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
     from data_schemas.io import write_table
     from pipelines.audio_io import write_audio
-    from pipelines.instruments import get_instrument
-    from pipelines.plots import plot_bowing
+    from pipelines.perform.instruments import get_instrument
+    from pipelines.reports.plots import plot_bowing
 
     if args.output:
         path = write_audio(args.output, output.audio, args.sample_rate)

@@ -1,7 +1,7 @@
 """The comparison job: render every score with every method and measure each with the yardstick.
 
-Methods: :data:`pipelines.methods.METHODS`. Every render records the instrument's contact
-diagnostics, and :func:`pipelines.evaluate.evaluate` judges each part; a score's figures
+Methods: :data:`pipelines.methods.registry.METHODS`. Every render records the instrument's contact
+diagnostics, and :func:`pipelines.listening.evaluate.evaluate` judges each part; a score's figures
 are the yardstick's ``piece`` figures over the notes of all its rendered parts.
 """
 
@@ -12,30 +12,26 @@ from pathlib import Path
 from typing import Any
 
 from data_schemas.errors import ArcoError, ParameterError
-from pipelines.methods import METHODS, MethodOutput, PartOutput, check_methods, render_method
-
-#: Figures compared between methods and whether larger is better (None: closer to 0).
-FIGURES = {
-    "reached_helmholtz_share": True,
-    "helmholtz_share": True,
-    "sustained_class3_share": True,
-    "attack_ms_median": False,
-    "attack_ms_p90": False,
-    "pitch_error_cents_median": None,
-    "level_error_db_median": None,
-    "render_seconds": False,
-}
+from pipelines.methods.registry import (
+    METHODS,
+    MethodOutput,
+    PartOutput,
+    check_methods,
+    render_method,
+)
+from pipelines.reports.figures import FIGURES
 
 
 def evaluate_output(output: MethodOutput, *, sample_rate: int,
                     config: dict[str, Any]) -> dict[str, Any]:
     """The yardstick's piece figures over all parts of a render, plus timings.
 
-    The single integration point with :mod:`pipelines.evaluate`: each part is evaluated
-    with :func:`pipelines.evaluate.evaluate` (contact diagnostics, the part's score for the
-    dynamic lanes) and the notes of all parts are summarised by its piece summary.
+    The single integration point with :mod:`pipelines.listening.evaluate`: each part is
+    evaluated with :func:`pipelines.listening.evaluate.evaluate` (contact diagnostics, the
+    part's score for the dynamic lanes) and the notes of all parts are summarised by
+    :func:`pipelines.listening.evaluate.piece_figures`.
     """
-    from pipelines.evaluate import _piece, evaluate
+    from pipelines.listening.evaluate import evaluate, piece_figures
 
     notes: list[dict[str, Any]] = []
     per_part = {}
@@ -46,7 +42,7 @@ def evaluate_output(output: MethodOutput, *, sample_rate: int,
         per_part[str(p.part_index)] = {"part_name": p.part_name, "instrument": p.instrument,
                                        "measured_from": ev["measured_from"], **ev["piece"]}
     audio_seconds = output.audio.size / sample_rate
-    return {**_piece(notes), "render_seconds": round(output.render_seconds, 3),
+    return {**piece_figures(notes), "render_seconds": round(output.render_seconds, 3),
             "audio_seconds": round(audio_seconds, 3),
             "real_time_factor": round(audio_seconds / max(output.render_seconds, 1e-9), 3),
             "parts": per_part}
@@ -89,11 +85,11 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
     """
     from data_schemas.actions import write_actions
     from pipelines.audio_io import write_audio
-    from pipelines.plots import plot_bowing
-    from pipelines.render import choose_parts, select_measures
-    from pipelines.report import write_report
-    from pipelines.rules_config import load_config
+    from pipelines.perform.config import load_config
+    from pipelines.reports.html import write_report
+    from pipelines.reports.plots import plot_bowing
     from pipelines.score import read_score
+    from pipelines.score.select import choose_parts, select_measures
 
     say = log or (lambda *_: None)
     check_methods(methods, db=db, models=models)
@@ -102,7 +98,7 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
         raise ParameterError(f"scores must have distinct file names, got {stems}")
     database = None
     if any(m.startswith("sampling") for m in methods):
-        from pipelines.sampling import open_database
+        from pipelines.methods.sampling import open_database
 
         database = open_database(db, search_config=search_config)
     config = load_config()

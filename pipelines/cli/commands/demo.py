@@ -24,8 +24,8 @@ import numpy as np
 
 from data_schemas.actions import write_actions
 from pipelines.audio_io import write_audio
-from pipelines.plots import plot_bowing
-from pipelines.scale import scale_actions
+from pipelines.perform.scale import scale_actions
+from pipelines.reports.plots import plot_bowing
 from synth import INSTRUMENT_NAMES, render_actions
 from synth.playability import yin_pitch
 from synth.strings import load_instrument
@@ -91,9 +91,10 @@ def scales(out: Path, seed: int) -> list[str]:
 
 def quartet_rules(out: Path, seed: int) -> list[str]:
     """Render the bundled quartet's opening with the rules; return report lines."""
-    from pipelines.render import choose_parts, render, select_measures
-    from pipelines.rules_config import load_config
+    from pipelines.methods.rules import render
+    from pipelines.perform.config import load_config
     from pipelines.score import read_score
+    from pipelines.score.select import choose_parts, select_measures
 
     score = bundled_score()
     notes = select_measures(read_score(score), *DEMO_MEASURES)
@@ -122,7 +123,7 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
     """Simulate recordings, build the database, train, compare the four methods."""
     import json
 
-    from pipelines.cli import main
+    from pipelines.cli.main import main
 
     notes, performers = DEMO_RECORDINGS
     steps = [

@@ -1,0 +1,1 @@
+"""The ``arco`` command line (entry point :func:`pipelines.cli.main.main`)."""

@@ -1,1 +1,0 @@
-"""Package data: TOML settings of the pipelines (rules.toml)."""

@@ -1,0 +1,1 @@
+"""Listening jobs: training the classifiers and evaluating renders and recordings."""

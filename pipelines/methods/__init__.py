@@ -1,0 +1,1 @@
+"""Render methods (notes -> actions -> audio), each one module, listed in a registry."""

@@ -1,0 +1,80 @@
+"""The render job: score -> notes -> rules -> actions -> audio (one part or the quartet)."""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.errors import ParameterError
+from pipelines.methods.result import PartRender, RenderResult, mix
+from pipelines.perform.rules import fermata_warp, perform_part
+
+
+def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
+           instrument: str | None = None, skill: int = 3, seed: int = 0,
+           sample_rate: int = 44100, transpose_octaves: bool = False, audio: bool = True,
+           progress: bool | None = None) -> RenderResult:
+    """Play the chosen parts with the performance rules and (optionally) synthesize them.
+
+    Parameters
+    ----------
+    notes : pandas.DataFrame
+        The notes table of the whole score (fermatas of every part make every part wait).
+    config : dict
+        Rules configuration.
+    parts : list of int
+        Part indices to render (each on its own instrument, then mixed).
+    instrument : str, optional
+        Override the instrument (only with one part).
+    skill : int
+        Vivi skill level 0..3.
+    seed : int
+        Seed of the skill jitter and of the synthesizer.
+    sample_rate : int, Hz
+        Audio sample rate.
+    transpose_octaves : bool
+        Fold out-of-range notes by octaves instead of failing.
+    audio : bool
+        Call the synthesizer (False: actions only).
+    progress : bool, optional
+        Show a progress bar (default: when stderr is a terminal).
+
+    Returns
+    -------
+    RenderResult
+    """
+    from tqdm import tqdm
+
+    if instrument is not None and len(parts) > 1:
+        raise ParameterError("--instrument applies to a single part (drop --all-parts)")
+    if sample_rate <= 0:
+        raise ParameterError(f"sample_rate={sample_rate} must be > 0")
+    rng = np.random.default_rng(seed)
+    warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    synth = _synth() if audio else None
+    show = sys.stderr.isatty() if progress is None else progress
+    result = RenderResult(None, sample_rate)
+    for index in tqdm(parts, desc="render", unit="part", disable=not show):
+        part = notes[notes["part_index"] == index]
+        name = instrument or str(part["instrument"].iloc[0])
+        perf = perform_part(part, config, instrument=name, skill=skill, rng=rng, warp=warp,
+                            transpose_octaves=transpose_octaves)
+        rendered = PartRender(index, str(part["part_name"].iloc[0]), name, perf)
+        if synth is not None:
+            rendered.audio = np.asarray(
+                synth(perf.actions, instrument=name, sample_rate=sample_rate, seed=seed,
+                      progress=show and len(parts) == 1),
+                dtype=np.float32)
+        result.parts.append(rendered)
+    if synth is not None:
+        result.audio = mix([p.audio for p in result.parts])
+    return result
+
+
+def _synth():
+    from synth import render_actions
+
+    return render_actions

@@ -1,0 +1,1 @@
+"""Notes -> performance: instrument facts in use, the rules' events, bowing and settings."""

@@ -1,0 +1,1 @@
+"""Comparison of methods: figures, the HTML report and bowing plots."""
