@@ -5,7 +5,8 @@ Two ways in:
 - the **block API** (:meth:`Instrument.process`) for the listening feedback loop: the object
   keeps its state and advances by N output samples under given controls, returning the audio
   block and the contact diagnostics of each string;
-- :func:`render_actions`, which plays a whole actions table (see
+- :meth:`Instrument.render` (and :func:`synth.render_actions`), which plays a whole
+  actions table (see
   :data:`data_schemas.ACTIONS`).
 
 Both share one core (:meth:`Instrument._run`), which advances every excited string at the
@@ -17,18 +18,27 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 
 from data_schemas.actions import ACTIONS
 from data_schemas.errors import ParameterError
 from synth.body import BlockConvolver, load_body_ir, synthesize_body_ir
 from synth.control_kernel import ramp_bowing
+from synth.controls import (
+    PLUCK_DISPLACEMENT,
+    PLUCK_SPEED,
+    SUB_BLOCK,
+    Block,
+    BowControl,
+    StringInput,
+)
 from synth.decimate import Decimator
 from synth.diagnostics import ContactDiagnostics, OnsetTracker, merge_diagnostics
 from synth.modal_kernel import MODE_GRIP, MODE_LIFTED
 from synth.strings import InstrumentConstants, load_instrument
+from synth.tracks import DEFAULT_TAIL, play_actions
 from synth.voice import StringOutput, StringVoice
 
 SUPPORTED_SAMPLE_RATES = (44100, 48000)
@@ -36,90 +46,16 @@ SUPPORTED_OVERSAMPLING = (1, 2, 4)
 #: Default oversampling and mode band; see README "Sound and speed" for the measurements.
 DEFAULT_OVERSAMPLE = 2
 DEFAULT_MAX_MODE_FREQUENCY = 20000.0
-#: Output samples per coefficient update of beta and finger (1.45 ms at 44.1 kHz).
-SUB_BLOCK = 64
-#: A pluck pulls the string this far (m) at this speed (m/s), then lets go.
-PLUCK_DISPLACEMENT = 0.005
-PLUCK_SPEED = 0.1
 #: Output level: audio = OUTPUT_GAIN * body(bridge force in N).
 OUTPUT_GAIN = 0.05
 
 BodySpec = str | os.PathLike | np.ndarray | None
 
 
-@dataclass(frozen=True)
-class BowControl:
-    """Bowing of one string at the end of a block.
-
-    Attributes
-    ----------
-    bow_velocity : float, m/s (+ = down-bow)
-    bow_force : float, N
-    beta : float
-        Bow-bridge distance / effective string length.
-    finger_ratio : float
-        Fraction of the string length removed by the finger (0 = open).
-    """
-
-    bow_velocity: float
-    bow_force: float
-    beta: float
-    finger_ratio: float = 0.0
-
-
-@dataclass
-class StringInput:
-    """Controls of one string over a run at the internal rate.
-
-    Attributes
-    ----------
-    bow_velocity, bow_force : np.ndarray [shape=(n_internal,)], m/s and N
-    contact_mode : np.ndarray [shape=(n_internal,)], int8
-    beta, finger_ratio : np.ndarray [shape=(n_sub_blocks,)]
-        One value per :data:`SUB_BLOCK` output samples (a single value when
-        ``steady_contact``).
-    pluck_offsets : sequence of int
-        Internal-sample offsets in this run where plucks start.
-    pluck_pulls : sequence of float, m
-        How far each pluck pulls the string before letting go (default
-        :data:`PLUCK_DISPLACEMENT`).
-    steady_contact : bool
-        beta and finger_ratio are the same over the whole run (one kernel call).
-    """
-
-    bow_velocity: np.ndarray
-    bow_force: np.ndarray
-    contact_mode: np.ndarray
-    beta: np.ndarray
-    finger_ratio: np.ndarray
-    pluck_offsets: tuple[int, ...] = ()
-    pluck_pulls: tuple[float, ...] = ()
-    steady_contact: bool = False
-
-
-@dataclass
-class Block:
-    """Output of :meth:`Instrument.process`.
-
-    Attributes
-    ----------
-    audio : np.ndarray [shape=(n_samples,)], float32
-    bridge_force : np.ndarray [shape=(n_samples,)], N
-        Summed bridge force after decimation, before the body.
-    diagnostics : dict of int to ContactDiagnostics
-        Per string that has been excited, over the whole block.
-    hop_diagnostics : dict of int to list of ContactDiagnostics
-        The same per hop, when the block was run with a hop size (else empty).
-    """
-
-    audio: np.ndarray
-    bridge_force: np.ndarray
-    diagnostics: dict[int, ContactDiagnostics]
-    hop_diagnostics: dict[int, list[ContactDiagnostics]] = field(default_factory=dict)
-
-
 class Instrument:
     """Violin, viola or cello: four modal strings, an anti-alias decimator and a body.
+
+    The ``modal`` engine of :mod:`synth.engines` (see :class:`synth.engines.Engine`).
 
     Parameters
     ----------
@@ -146,6 +82,9 @@ class Instrument:
     config : path-like, optional
         Alternative string-constants TOML.
     """
+
+    #: Contact diagnostics (stick/slip under the bow) are measured.
+    has_diagnostics = True
 
     def __init__(self, name: str | InstrumentConstants = "violin", *, sample_rate: int = 44100,
                  oversample: int | None = None, seed: int = 0, body: BodySpec = "synthesized",
@@ -264,6 +203,20 @@ class Instrument:
                                     (0,) if s in plucked else (), steady_contact=True)
             self._held[s] = target
         return self._run(n_samples, inputs, track=diagnostics)
+
+    def render(self, actions: pd.DataFrame, *, tail: float = DEFAULT_TAIL,
+               progress: bool = False, diagnostics: bool = False,
+               ) -> tuple[np.ndarray, pd.DataFrame | None]:
+        """Play a whole actions table from the current state (see :func:`synth.render_actions`).
+
+        Returns
+        -------
+        audio : np.ndarray [shape=(n,)], float32
+        diagnostics : pandas.DataFrame or None
+            Per-hop contact diagnostics when asked for.
+        """
+        return play_actions(self, actions, tail=tail, progress=progress,
+                            diagnostics=diagnostics)
 
     def _check_string(self, s: int) -> None:
         if not 0 <= s < self.n_strings:

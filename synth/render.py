@@ -1,4 +1,4 @@
-"""Play a whole actions table on an instrument: actions -> audio (and diagnostics).
+"""Actions table -> audio on any registered engine (default: the modal model).
 
 Rows are control frames per string; continuous columns are interpolated linearly between
 rows of the same string (at a repeated time the later row wins, so steps are exact). A
@@ -11,81 +11,27 @@ is the row's ``bow_force``: the string is pulled ``bow_force`` x 5 mm/N before i
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
 
-from data_schemas.actions import validate_actions
-from data_schemas.errors import ParameterError
-from synth.control_kernel import sample_bowing
-from synth.instrument import PLUCK_DISPLACEMENT, SUB_BLOCK, Instrument, StringInput
-
-#: Output samples rendered per step (a multiple of SUB_BLOCK); ~1.5 s at 44.1 kHz (longer
-#: steps cost nothing in the body FFT per sample and save per-step overhead).
-CHUNK = 65536
-#: Ring-out after the last row, s.
-DEFAULT_TAIL = 1.0
-#: Diagnostics hop in output samples (the listening loop's control rate).
-DIAGNOSTICS_HOP = 256
-_STEP = 1e-9
-#: A pluck row's bow_force at which the pull is PLUCK_DISPLACEMENT, N.
-PLUCK_REFERENCE_FORCE = 1.0
+from synth.engines import DEFAULT_ENGINE, Engine, get_engine
+from synth.tracks import DEFAULT_TAIL
 
 
-@dataclass(frozen=True)
-class _StringTrack:
-    """The rows of one string as arrays, for interpolation."""
-
-    time: np.ndarray
-    bow_velocity: np.ndarray
-    bow_force: np.ndarray
-    beta: np.ndarray
-    finger_ratio: np.ndarray
-    pluck_times: np.ndarray
-    pluck_forces: np.ndarray
-
-    @classmethod
-    def from_columns(cls, columns: dict[str, np.ndarray]) -> _StringTrack:
-        """Build from one string's rows, given as arrays per column (in time order)."""
-        time = columns["time"].astype(np.float64)  # a copy: nudged below
-        # Rows at a repeated time are a step: nudge them apart by a nanosecond (far below a
-        # sample) so that linear interpolation takes the later row from that time on.
-        for i in np.flatnonzero(np.diff(time) <= 0.0) + 1:
-            time[i] = max(time[i], time[i - 1] + _STEP)
-        pluck = columns["pluck"].astype(bool)
-        return cls(time, *(columns[c].astype(np.float64) for c in
-                           ("bow_velocity", "bow_force", "beta", "finger_ratio")),
-                   columns["time"][pluck].astype(np.float64),
-                   columns["bow_force"][pluck].astype(np.float64))
-
-    def sample(self, column: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """Linear interpolation of ``column`` at times ``t`` (held beyond the ends)."""
-        return np.interp(t, self.time, column)
-
-    def inputs(self, start: int, n_out: int, inst: Instrument) -> StringInput:
-        """Controls for output samples ``start .. start + n_out``."""
-        os_ = inst.oversample
-        t_sub = (start + np.arange(0, n_out, SUB_BLOCK)) / inst.sample_rate
-        velocity, force = np.empty(n_out * os_), np.empty(n_out * os_)
-        mode = np.empty(n_out * os_, np.int8)
-        sample_bowing(self.time, self.bow_velocity, self.bow_force, start * os_,
-                      float(inst.internal_rate), velocity, force, mode)
-        lo = start / inst.sample_rate
-        hi = (start + n_out) / inst.sample_rate
-        now = (self.pluck_times >= lo) & (self.pluck_times < hi)
-        offsets = tuple(int(round((p - lo) * inst.internal_rate)) for p in self.pluck_times[now])
-        pulls = tuple(PLUCK_DISPLACEMENT * (f / PLUCK_REFERENCE_FORCE if f > 0 else 1.0)
-                      for f in self.pluck_forces[now])
-        return StringInput(velocity, force, mode, self.sample(self.beta, t_sub),
-                           self.sample(self.finger_ratio, t_sub), offsets, pulls)
+def _engine(instrument: str | Engine, engine: str, sample_rate: int, seed: int,
+            options: dict[str, Any]) -> Engine:
+    if not isinstance(instrument, str):
+        return instrument
+    return get_engine(engine, instrument, sample_rate=sample_rate, seed=seed, **options)
 
 
 def render_actions(
     actions: pd.DataFrame,
     *,
-    instrument: str | Instrument = "violin",
+    instrument: str | Engine = "violin",
+    engine: str = DEFAULT_ENGINE,
     sample_rate: int = 44100,
     seed: int = 0,
     oversample: int | None = None,
@@ -100,13 +46,18 @@ def render_actions(
     ----------
     actions : pandas.DataFrame
         An actions table (validated here; see :data:`data_schemas.ACTIONS`).
-    instrument : {"violin", "viola", "cello"} or Instrument
-        The instrument (a fresh one is built from the name, seed and settings).
+    instrument : {"violin", "viola", "cello"} or Engine
+        The instrument: a name (a fresh engine is built from it, the seed and settings) or
+        an engine to play on from its current state.
+    engine : str
+        Registered engine to build from a name (:func:`synth.engines.engine_names`).
     sample_rate : {44100, 48000}, Hz
     seed : int
         Seed of the friction noise; the same actions and seed give identical audio.
     oversample : {1, 2, 4}, optional
+        Internal oversampling of the modal engine (default 2).
     body : "synthesized", path-like, np.ndarray or None
+        Body impulse response of the modal engine.
     body_seed : int
         Which synthesized body (see :class:`synth.Instrument`).
     tail : float, s
@@ -117,17 +68,28 @@ def render_actions(
     Returns
     -------
     np.ndarray [shape=(n,)], float32
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> actions = pd.DataFrame({"time": [0.0, 0.5], "string": [1, 1],
+    ...     "finger_ratio": [0.0, 0.0], "bow_force": [1.0, 1.0], "bow_velocity": [0.3, 0.3],
+    ...     "beta": [0.1, 0.1], "bow_position": [0.2, 0.5], "pluck": [False, False]})
+    >>> audio = render_actions(actions, instrument="violin", seed=0, tail=0.1)
+    >>> audio.dtype, audio.size / 44100 >= 0.6
+    (dtype('float32'), True)
     """
-    return render_with_diagnostics(actions, instrument=instrument, sample_rate=sample_rate,
-                                   seed=seed, oversample=oversample, body=body,
-                                   body_seed=body_seed, tail=tail, progress=progress,
-                                   diagnostics=False)[0]
+    return render_with_diagnostics(actions, instrument=instrument, engine=engine,
+                                   sample_rate=sample_rate, seed=seed, oversample=oversample,
+                                   body=body, body_seed=body_seed, tail=tail,
+                                   progress=progress, diagnostics=False)[0]
 
 
 def render_with_diagnostics(
     actions: pd.DataFrame,
     *,
-    instrument: str | Instrument = "violin",
+    instrument: str | Engine = "violin",
+    engine: str = DEFAULT_ENGINE,
     sample_rate: int = 44100,
     seed: int = 0,
     oversample: int | None = None,
@@ -144,53 +106,10 @@ def render_with_diagnostics(
     audio : np.ndarray [shape=(n,)], float32
     diagnostics : pandas.DataFrame or None
         One row per hop of 256 samples per excited string (table
-        :data:`data_schemas.CONTACT_DIAGNOSTICS`), or None when not asked for.
+        :data:`data_schemas.CONTACT_DIAGNOSTICS`), or None when not asked for or when the
+        engine cannot measure them.
     """
-    from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
-
-    actions = validate_actions(actions)
-    inst = instrument if isinstance(instrument, Instrument) else Instrument(
-        instrument, sample_rate=sample_rate, seed=seed, oversample=oversample, body=body,
-        body_seed=body_seed)
-    strings = actions["string"].to_numpy()
-    if np.any(strings >= inst.n_strings):
-        row = int(np.flatnonzero(strings >= inst.n_strings)[0])
-        raise ParameterError(f"actions: column 'string', row {row}: the {inst.name} has "
-                             f"strings 0..{inst.n_strings - 1}")
-    columns = {c: actions[c].to_numpy() for c in ("time", "bow_velocity", "bow_force",
-                                                  "beta", "finger_ratio", "pluck")}
-    order = np.argsort(strings, kind="stable")  # rows of each string, in table order
-    tracks = {}
-    for s in np.unique(strings):
-        rows = order[strings[order] == s]
-        tracks[int(s)] = _StringTrack.from_columns({c: v[rows] for c, v in columns.items()})
-    end = (float(actions["time"].max()) if len(actions) else 0.0) + tail
-    n_total = int(np.ceil(end * inst.sample_rate / SUB_BLOCK)) * SUB_BLOCK
-    hop = DIAGNOSTICS_HOP if diagnostics else None
-    audio, rows = [], []
-    bar = tqdm(total=round(n_total / inst.sample_rate, 2), unit="s audio", disable=not progress)
-    start = 0
-    while start < n_total:
-        n_out = min(CHUNK, n_total - start)
-        block = inst._run(n_out, {s: tr.inputs(start, n_out, inst) for s, tr in tracks.items()},
-                          hop=hop, track=diagnostics)
-        audio.append(block.audio)
-        if diagnostics:
-            rows.extend(_diagnostic_rows(start / inst.sample_rate, inst.sample_rate,
-                                         block.hop_diagnostics))
-        bar.update(round(n_out / inst.sample_rate, 2))
-        start += n_out
-    bar.close()
-    table = pd.DataFrame(rows, columns=CONTACT_DIAGNOSTICS.column_names) if diagnostics else None
-    return np.concatenate(audio) if audio else np.zeros(0, np.float32), table
-
-
-def _diagnostic_rows(start: float, sample_rate: int, per_hop: dict) -> list[tuple]:
-    rows = []
-    for s, hops in per_hop.items():
-        for k, d in enumerate(hops):
-            period = d.sounding_period if np.isfinite(d.sounding_period) else None
-            rows.append((start + k * DIAGNOSTICS_HOP / sample_rate, s, d.slip_onsets,
-                         d.slipping_share, d.contact_share, d.mean_slip_speed, period))
-    rows.sort(key=lambda r: (r[0], r[1]))
-    return rows
+    options = {"oversample": oversample, "body": body, "body_seed": body_seed}
+    inst = _engine(instrument, engine, sample_rate, seed, options)
+    return inst.render(actions, tail=tail, progress=progress,
+                       diagnostics=diagnostics and inst.has_diagnostics)

@@ -129,6 +129,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
                     transpose_octaves: bool = False, warp=None,
                     rng: np.random.Generator | None = None,
                     settings: ControllerSettings | None = None, diagnostics: bool = True,
+                    engine: str = "modal",
                     ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame | None, Performance]:
     """Play one part with the rules' bowing and the listening controller's force.
 
@@ -159,6 +160,8 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     diagnostics : bool
         Record the instrument's contact diagnostics (for the evaluation; the controller
         never reads them).
+    engine : str
+        Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
 
     Returns
     -------
@@ -171,7 +174,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     performance : Performance
         The rules' plan (events, warnings) the controller followed.
     """
-    from synth.instrument import Instrument
+    from synth.engines import get_engine
     from synth.listening.classifier import load_models
     from synth.listening.controller import perform
 
@@ -186,7 +189,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
                         transpose_octaves=transpose_octaves)
     plan, span = hop_plan(perf, config, name, sample_rate=sample_rate)
     models = load_models(models_dir, name)
-    inst = Instrument(name, sample_rate=sample_rate, seed=seed)
+    inst = get_engine(engine, name, sample_rate=sample_rate, seed=seed)
     log = perform(plan, models, inst, rng=np.random.default_rng([seed, 1]),
                   settings=settings, record_diagnostics=diagnostics)
     tail = inst.process(int(TAIL * sample_rate), {}, diagnostics=False).audio

@@ -370,7 +370,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
 
 
 def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrument: str,
-                  sample_rate: int = 44100, seed: int = 0
+                  sample_rate: int = 44100, seed: int = 0, engine: str = "modal",
                   ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame]:
     """Play sampled actions with the listening controller correcting the force hop by hop.
 
@@ -380,6 +380,19 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     clamp) holds a correction factor that starts at 1 on every stroke and is multiplied by
     ``K**(3 - c_avg)`` from the classes it hears; the force played is the sampled force
     times that factor (clipped to 0..50 N).
+
+    Parameters
+    ----------
+    perf : Performance
+        The sampled performance.
+    models_dir : path-like
+        Directory written by ``arco train``.
+    instrument : str
+    sample_rate : int, Hz
+    seed : int
+        Seed of the controller's jitter and the engine.
+    engine : str
+        Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
 
     Returns
     -------
@@ -391,7 +404,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     """
     from pipelines.methods.feedback import TAIL, diagnostics_table, hop_plan, played_actions
     from pipelines.perform.config import load_config
-    from synth.instrument import Instrument
+    from synth.engines import get_engine
     from synth.listening.classifier import load_models
     from synth.listening.controller import ControllerSettings, perform
     from synth.listening.features import HOP
@@ -418,7 +431,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
         peak = pd.Series(speed).groupby(stroke).transform("max").to_numpy()
         target_speed[:, int(s)] = peak
     plan = dataclasses.replace(plan, target_speed=target_speed)
-    inst = Instrument(instrument, sample_rate=sample_rate, seed=seed)
+    inst = get_engine(engine, instrument, sample_rate=sample_rate, seed=seed)
     log = perform(plan, models, inst, rng=np.random.default_rng([seed, 2]),
                   settings=ControllerSettings(range_margin=0.0), record_diagnostics=True,
                   planned_force=sampled)

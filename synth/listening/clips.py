@@ -4,7 +4,7 @@ A clip accelerates the bow to its velocity (at most 5 m/s^2), lets the note sett
 ``settle`` seconds and records the next ``record`` seconds (audio, bridge force, slip onsets).
 :func:`auto_label` is the automatic teacher's judgement of a clip.
 
-Every clip is played on one violin, ``Instrument(instrument, body_seed=body_seed)`` (default
+Every clip is played on one violin, the ``modal`` engine with ``body_seed`` (default
 0, the body every render plays unless asked otherwise), while ``seed`` varies the friction
 noise. When the body followed each clip's seed, clips were each heard on a different body
 and a classifier had to generalise across bodies it never plays (violin A mp and E f:
@@ -18,7 +18,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from synth.instrument import BowControl, Instrument
+from synth.controls import BowControl
+from synth.engines import get_engine
 from synth.listening.features import HOP, WINDOW
 from synth.listening.teacher import (
     TeacherThresholds,
@@ -110,7 +111,8 @@ def render_clip(spec: ClipSpec, *, settle: float = 0.7, record: float = 0.3, see
     -------
     Clip
     """
-    inst = Instrument(spec.instrument, sample_rate=sample_rate, seed=seed, body_seed=body_seed)
+    inst = get_engine("modal", spec.instrument, sample_rate=sample_rate, seed=seed,
+                      body_seed=body_seed)
     control = BowControl(spec.bow_velocity, spec.bow_force, spec.beta, spec.finger_ratio)
     ramp = max(int(abs(spec.bow_velocity) / MAX_ACCELERATION * sample_rate), 256)
     n_settle = max(int(settle * sample_rate) - int(context * sample_rate), 256)

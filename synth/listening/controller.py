@@ -20,7 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from synth.instrument import BowControl, Instrument
+from synth.controls import BowControl
+from synth.engines import Engine
 from synth.listening.classifier import PairModel
 from synth.listening.features import HOP, StreamingFeatures, yin_window_for
 
@@ -210,7 +211,7 @@ class PerformanceLog:
     diagnostics: dict = field(default_factory=dict)
 
 
-def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument: Instrument, *,
+def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument: Engine, *,
             rng: np.random.Generator, settings: ControllerSettings | None = None,
             K: float | None = None, initial_force: float | None = None,
             record_diagnostics: bool = False,
@@ -226,7 +227,7 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     plan : HopPlan
     models : dict of (string, dynamic) to PairModel
         Trained pairs; a missing pair falls back to the nearest dynamic of the same string.
-    instrument : Instrument
+    instrument : Engine
         A fresh instrument (its block API is driven hop by hop).
     rng : numpy.random.Generator
         Jitter source.

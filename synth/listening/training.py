@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from synth.instrument import Instrument
+from synth.engines import get_engine
 from synth.listening.classifier import FINGERS, PairModel, fit_pair
 from synth.listening.clips import (
     MAX_ACCELERATION,
@@ -332,7 +332,7 @@ def _play_note(model: PairModel, semitones: float, *, force: float, K: float,
                      dynamic=model.dynamic, string=model.string,
                      n_strings=len(inst_c.strings))
     # Practice notes are played on the clips' violin (the training body), noise seeded anew.
-    inst = Instrument(model.instrument, seed=seed, body_seed=settings.body_seed)
+    inst = get_engine("modal", model.instrument, seed=seed, body_seed=settings.body_seed)
     log = perform(plan, {(model.string, model.dynamic): model}, inst,
                   rng=np.random.default_rng(seed), settings=settings.controller, K=K,
                   initial_force=force, record_diagnostics=record_diagnostics)

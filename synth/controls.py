@@ -1,0 +1,85 @@
+"""What goes into an engine and what comes out: per-string bowing controls and audio blocks."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from synth.diagnostics import ContactDiagnostics
+
+#: Output samples per coefficient update of beta and finger (1.45 ms at 44.1 kHz).
+SUB_BLOCK = 64
+#: A pluck pulls the string this far (m) at this speed (m/s), then lets go.
+PLUCK_DISPLACEMENT = 0.005
+PLUCK_SPEED = 0.1
+
+@dataclass(frozen=True)
+class BowControl:
+    """Bowing of one string at the end of a block.
+
+    Attributes
+    ----------
+    bow_velocity : float, m/s (+ = down-bow)
+    bow_force : float, N
+    beta : float
+        Bow-bridge distance / effective string length.
+    finger_ratio : float
+        Fraction of the string length removed by the finger (0 = open).
+    """
+
+    bow_velocity: float
+    bow_force: float
+    beta: float
+    finger_ratio: float = 0.0
+
+
+@dataclass
+class StringInput:
+    """Controls of one string over a run at the internal rate.
+
+    Attributes
+    ----------
+    bow_velocity, bow_force : np.ndarray [shape=(n_internal,)], m/s and N
+    contact_mode : np.ndarray [shape=(n_internal,)], int8
+    beta, finger_ratio : np.ndarray [shape=(n_sub_blocks,)]
+        One value per :data:`SUB_BLOCK` output samples (a single value when
+        ``steady_contact``).
+    pluck_offsets : sequence of int
+        Internal-sample offsets in this run where plucks start.
+    pluck_pulls : sequence of float, m
+        How far each pluck pulls the string before letting go (default
+        :data:`PLUCK_DISPLACEMENT`).
+    steady_contact : bool
+        beta and finger_ratio are the same over the whole run (one kernel call).
+    """
+
+    bow_velocity: np.ndarray
+    bow_force: np.ndarray
+    contact_mode: np.ndarray
+    beta: np.ndarray
+    finger_ratio: np.ndarray
+    pluck_offsets: tuple[int, ...] = ()
+    pluck_pulls: tuple[float, ...] = ()
+    steady_contact: bool = False
+
+
+@dataclass
+class Block:
+    """Output of :meth:`Instrument.process`.
+
+    Attributes
+    ----------
+    audio : np.ndarray [shape=(n_samples,)], float32
+    bridge_force : np.ndarray [shape=(n_samples,)], N
+        Summed bridge force after decimation, before the body.
+    diagnostics : dict of int to ContactDiagnostics
+        Per string that has been excited, over the whole block.
+    hop_diagnostics : dict of int to list of ContactDiagnostics
+        The same per hop, when the block was run with a hop size (else empty).
+    """
+
+    audio: np.ndarray
+    bridge_force: np.ndarray
+    diagnostics: dict[int, ContactDiagnostics]
+    hop_diagnostics: dict[int, list[ContactDiagnostics]] = field(default_factory=dict)
