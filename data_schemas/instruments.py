@@ -1,0 +1,204 @@
+"""Facts of the violin family (tunings, string lengths, ranges, bow, limits), written once.
+
+Every package reads them from ``data_schemas/config/instruments.toml`` through this module:
+the rules, the instrument model, the simulated performer, importers, extraction and
+sampling. Strings are counted from 0 = the lowest string.
+
+Examples
+--------
+>>> cello = instrument_facts("cello")
+>>> cello.open_strings, cello.string_lengths[0]
+((36, 43, 50, 57), 0.673)
+>>> round(float(finger_ratio(12)), 3)
+0.5
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
+
+import numpy as np
+
+from data_schemas.errors import ParameterError, SchemaError
+
+INSTRUMENT_NAMES = ("violin", "viola", "cello")
+
+
+@dataclass(frozen=True)
+class InstrumentFacts:
+    """Constants of one member of the violin family.
+
+    Attributes
+    ----------
+    name : str
+        ``violin``, ``viola`` or ``cello``.
+    string_names : tuple of str
+        Letter names of the strings, lowest first.
+    open_strings : tuple of int
+        MIDI pitches of the open strings, lowest first.
+    string_lengths : tuple of float, m
+        Speaking length of each open string (nut to bridge), lowest first.
+    highest : int
+        Highest playable (stopped) MIDI pitch.
+    bow_length : float, m
+        Usable length of the bow hair.
+    body_scale : float
+        Body size relative to the violin's.
+    """
+
+    name: str
+    string_names: tuple[str, ...]
+    open_strings: tuple[int, ...]
+    string_lengths: tuple[float, ...]
+    highest: int
+    bow_length: float
+    body_scale: float
+
+    @property
+    def lowest(self) -> int:
+        """Lowest playable MIDI pitch (the open lowest string)."""
+        return self.open_strings[0]
+
+    @property
+    def n_strings(self) -> int:
+        """Number of strings."""
+        return len(self.open_strings)
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Limits shared by every instrument.
+
+    Attributes
+    ----------
+    tuning_a4 : float, Hz
+        Pitch of A4.
+    max_finger_ratio : float
+        Largest fraction of a string the finger may stop off.
+    max_bow_acceleration : float, m/s^2
+        Largest change of bow velocity per second.
+    """
+
+    tuning_a4: float
+    max_finger_ratio: float
+    max_bow_acceleration: float
+
+
+def _path() -> str:
+    return str(resources.files("data_schemas") / "config" / "instruments.toml")
+
+
+def _positive(value: object, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not (
+            math.isfinite(value) and value > 0):
+        raise SchemaError(f"{_path()}: {where} = {value!r} must be a positive number")
+    return float(value)
+
+
+def _instrument(entry: dict, where: str) -> InstrumentFacts:
+    try:
+        names = tuple(str(s) for s in entry["string_names"])
+        opens = tuple(int(p) for p in entry["open_strings"])
+        lengths = tuple(_positive(x, f"{where}.string_lengths") for x in entry["string_lengths"])
+        facts = InstrumentFacts(str(entry["name"]), names, opens, lengths, int(entry["highest"]),
+                                _positive(entry["bow_length"], f"{where}.bow_length"),
+                                _positive(entry["body_scale"], f"{where}.body_scale"))
+    except KeyError as exc:
+        raise SchemaError(f"{_path()}: {where} has no {exc.args[0]!r}") from None
+    if not len(names) == len(opens) == len(lengths) or list(opens) != sorted(opens):
+        raise SchemaError(f"{_path()}: {where}: string_names, open_strings and string_lengths "
+                          "must have one entry per string, lowest first")
+    return facts
+
+
+@cache
+def _load() -> tuple[dict[str, InstrumentFacts], Limits]:
+    with open(_path(), "rb") as fh:
+        data = tomllib.load(fh)
+    table = {}
+    for i, entry in enumerate(data.get("instrument", [])):
+        facts = _instrument(entry, f"instrument[{i}]")
+        table[facts.name] = facts
+    lim = data.get("limits", {})
+    limits = Limits(*(_positive(lim.get(k), f"limits.{k}") for k in
+                      ("tuning_a4", "max_finger_ratio", "max_bow_acceleration")))
+    return table, limits
+
+
+def instrument_facts(name: str) -> InstrumentFacts:
+    """Return the facts of instrument ``name``.
+
+    Parameters
+    ----------
+    name : {"violin", "viola", "cello"}
+
+    Returns
+    -------
+    InstrumentFacts
+
+    Raises
+    ------
+    ParameterError
+        Unknown instrument (the message lists the known ones).
+
+    Examples
+    --------
+    >>> instrument_facts("viola").string_names
+    ('C', 'G', 'D', 'A')
+    """
+    table, _ = _load()
+    try:
+        return table[name]
+    except KeyError:
+        raise ParameterError(f"instrument={name!r} is not one of {sorted(table)}") from None
+
+
+def limits() -> Limits:
+    """Return the limits shared by every instrument (tuning, finger, bow acceleration).
+
+    Examples
+    --------
+    >>> limits().max_bow_acceleration
+    5.0
+    """
+    return _load()[1]
+
+
+def finger_ratio(semitones: float | np.ndarray) -> np.ndarray:
+    """Fraction of the string length removed by a finger ``semitones`` above the open string.
+
+    Parameters
+    ----------
+    semitones : float or np.ndarray [shape=(n,)], semitones
+        Finger position above the open string (0 = open).
+
+    Returns
+    -------
+    np.ndarray [shape=(n,)]
+        ``1 - 2**(-semitones/12)``.
+
+    Examples
+    --------
+    >>> finger_ratio(np.array([0.0, 12.0, 24.0])).tolist()
+    [0.0, 0.5, 0.75]
+    """
+    return 1.0 - 2.0 ** (-np.asarray(semitones, dtype=np.float64) / 12.0)
+
+
+def semitones_of(ratio: float | np.ndarray) -> np.ndarray:
+    """Inverse of :func:`finger_ratio`: semitones above the open string.
+
+    Examples
+    --------
+    >>> (semitones_of(np.array([0.0, 0.5])) + 0.0).tolist()
+    [0.0, 12.0]
+    """
+    return -12.0 * np.log2(1.0 - np.asarray(ratio, dtype=np.float64))
+
+
+__all__ = ["INSTRUMENT_NAMES", "InstrumentFacts", "Limits", "finger_ratio", "instrument_facts",
+           "limits", "semitones_of"]
