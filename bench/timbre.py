@@ -63,9 +63,6 @@ def shared_recordings() -> list[recordings.Recording]:
 def given_recordings(triples: list[list[str]]) -> list[recordings.Recording]:
     out = []
     for audio, notes, alignment in triples:
-        for path in (audio, notes, alignment):
-            if not Path(path).is_file():
-                raise ParameterError(f"{path}: file not found")
         name = Path(audio).stem
         taken = {r.name for r in out}
         name = name if name not in taken else f"{name}-{len(out)}"
@@ -127,6 +124,17 @@ def clean(value: Any) -> Any:
     return value
 
 
+def read_table(rec: recordings.Recording, seconds: float):
+    """The recording's aligned notes that start in the first ``seconds``."""
+    if not rec.audio.is_file():
+        raise ParameterError(f"{rec.audio}: file not found")
+    table = recordings.first_seconds(
+        recordings.read_aligned_notes(rec.notes, rec.alignment), seconds)
+    if table.empty:
+        raise ParameterError(f"{rec.alignment}: no note starts in the first {seconds} s")
+    return table
+
+
 def keep(args: argparse.Namespace, rec: recordings.Recording, source: str, audio: np.ndarray,
          table) -> None:
     """With ``--out``: write the source's loudness-normalised audio as DIR/NAME-SOURCE.wav."""
@@ -140,10 +148,7 @@ def keep(args: argparse.Namespace, rec: recordings.Recording, source: str, audio
 def measure_recording(rec: recordings.Recording, args: argparse.Namespace, renderers: dict,
                       workdir: Path) -> tuple[dict[str, Any], np.ndarray]:
     """Render, measure and compare every source for one recording (+ the real MFCC frames)."""
-    table = recordings.first_seconds(
-        recordings.read_aligned_notes(rec.notes, rec.alignment), args.seconds)
-    if table.empty:
-        raise ParameterError(f"{rec.alignment}: no note starts in the first {args.seconds} s")
+    table = read_table(rec, args.seconds)
     n = int(round(args.seconds * SAMPLE_RATE))
     midi = recordings.write_aligned_midi(table, workdir / f"{rec.name}.mid")
     real_audio = recordings.read_audio(rec.audio, seconds=args.seconds, sample_rate=SAMPLE_RATE)
@@ -243,6 +248,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def run(args: argparse.Namespace) -> dict[str, Any]:
     started = time.perf_counter()
     recs = given_recordings(args.recording) if args.recording else shared_recordings()
+    for rec in recs:  # every input checked before any render
+        read_table(rec, args.seconds)
     renderers = make_renderers(args)
     per: dict[str, dict] = {}
     frames: dict[str, np.ndarray] = {}

@@ -230,7 +230,7 @@ def read_audio(path: str | os.PathLike, *, seconds: float | None = None,
         info = sf.info(str(path))
         frames = -1 if seconds is None else int(np.ceil(seconds * info.samplerate))
         data, rate = sf.read(str(path), frames=frames, dtype="float64", always_2d=True)
-    except (RuntimeError, sf.LibsndfileError) as exc:
+    except RuntimeError as exc:  # soundfile's errors are RuntimeErrors
         raise ParameterError(f"{path}: cannot read audio ({str(exc)[:200]})") from None
     audio = data.mean(axis=1)
     if rate != sample_rate:
