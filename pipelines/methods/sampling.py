@@ -4,7 +4,7 @@ For each part the rules' front end (:func:`pipelines.perform.rules.build_events`
 string and finger choice, fermatas, slurs, bow directions, articulations) turns the notes
 into events; every bowed event becomes a sampling target (group = technique x direction x
 slur position x run position). The search (:mod:`gesture_db.search`) picks one database
-sample per target, :mod:`gesture_db.render` stretches and joins them into an actions table.
+sample per target, :mod:`gesture_db.assemble` stretches and joins them into an actions table.
 Without listening models (or with ``feedback=False``) the actions play open loop through
 :func:`synth.render_actions`; with models the listening controller
 (:mod:`synth.listening.controller`) corrects the sampled force hop by hop: each string's
@@ -76,8 +76,8 @@ def open_database(path: str | os.PathLike, *, search_config: str | os.PathLike |
     SchemaError
         No database at ``path`` or one of another schema version.
     """
+    from gesture_db.assemble import ContourSource
     from gesture_db.predict import load_or_fit_predictors
-    from gesture_db.render import ContourSource
     from gesture_db.search import SearchIndex, load_search_config
     from gesture_db.store import GestureDB
 
@@ -255,7 +255,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     choices : pandas.DataFrame
         The samples chosen (:data:`data_schemas.sampling.SAMPLE_CHOICES`).
     """
-    from gesture_db.render import render_samples
+    from gesture_db.assemble import assemble_actions
     from gesture_db.search import search
     from pipelines.perform.rules import prepare_events
 
@@ -265,7 +265,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     targets, _bowed = targets_from_events(events, notes)
     result = search(targets, database.index, predictors=database.predictors,
                     config=database.search_config)
-    actions = render_samples(targets, result.choices, database.contours)
+    actions = assemble_actions(targets, result.choices, database.contours)
     actions = adapt_forces(actions, _name, database.search_config)
     actions = _extra_rows(actions, events)
     warnings = [f"note group {g} is not in the database; sampled from {r}"

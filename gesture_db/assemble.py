@@ -23,7 +23,7 @@ from data_schemas.recording import BOW_LENGTH
 from gesture_db.join import CROSSFADE, Piece, join_run
 from gesture_db.stretch import EDGE, stretch
 
-#: Default control frame rate of rendered actions (Hz), like the recordings.
+#: Default control frame rate of assembled actions (Hz), like the recordings.
 FRAME_RATE = 240.0
 #: Distance kept from the frog and the tip (share of the hair).
 MARGIN = 0.04
@@ -62,11 +62,12 @@ class ContourSource:
                               source=str(self.db.path)) from None
 
 
-def render_samples(targets: pd.DataFrame, choices: pd.DataFrame,
-                   contours: ContourSource | Callable[[str, str], tuple[np.ndarray, np.ndarray]],
-                   *, frame_rate: float = FRAME_RATE, edge: float = EDGE,
-                   crossfade: float = CROSSFADE, bow_length: float = BOW_LENGTH,
-                   margin: float = MARGIN) -> pd.DataFrame:
+def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
+                     contours: ContourSource | Callable[[str, str],
+                                                        tuple[np.ndarray, np.ndarray]],
+                     *, frame_rate: float = FRAME_RATE, edge: float = EDGE,
+                     crossfade: float = CROSSFADE, bow_length: float = BOW_LENGTH,
+                     margin: float = MARGIN) -> pd.DataFrame:
     """Stretch and join the chosen samples into an actions table.
 
     Parameters
@@ -201,4 +202,4 @@ def _with_lifts(parts: list[pd.DataFrame]) -> pd.DataFrame:
     return table.sort_values("time", kind="stable").reset_index(drop=True)
 
 
-__all__ = ["FRAME_RATE", "MARGIN", "ContourSource", "render_samples"]
+__all__ = ["FRAME_RATE", "MARGIN", "ContourSource", "assemble_actions"]
