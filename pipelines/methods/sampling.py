@@ -329,9 +329,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
 
     if sample_rate <= 0:
         raise ParameterError(f"sample_rate={sample_rate} must be > 0")
-    parts = parts if parts is not None else choose_parts(notes, None, False)
-    if instrument is not None and len(parts) > 1:
-        raise ParameterError("--instrument applies to a single part (drop --all-parts)")
+    parts = _parts_to_play(notes, parts, instrument)
     database = db if isinstance(db, SamplingDatabase) else open_database(db)
     config = config or load_config()
     warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
@@ -339,31 +337,61 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
     show = sys.stderr.isatty() if progress is None else progress
     result = RenderResult(None, sample_rate)
     for index in tqdm(parts, desc="sampling", unit="part", disable=not show):
-        part = notes[notes["part_index"] == index]
-        name = instrument or str(part["instrument"].iloc[0])
-        perf, targets, choices = sample_part(part, database, config, instrument=name, warp=warp,
-                                             transpose_octaves=transpose_octaves)
-        rendered = SampledPart(index, str(part["part_name"].iloc[0]), name, perf,
-                               targets=targets, choices=choices, feedback=closed)
-        if audio and closed:
-            y, played, diag = correct_force(perf, models, instrument=name,
-                                            sample_rate=sample_rate, seed=seed)
-            rendered.audio = y
-            rendered.extras["sampled_actions"] = perf.actions
-            rendered.performance = Performance(played, perf.events, perf.warnings)
-            rendered.diagnostics = diag
-        elif audio:
-            from synth import render_with_diagnostics
-
-            y, diag = render_with_diagnostics(perf.actions, instrument=name,
-                                              sample_rate=sample_rate, seed=seed,
-                                              diagnostics=diagnostics)
-            rendered.audio = np.asarray(y, np.float32)
-            rendered.diagnostics = diag
+        rendered = _sampled_part(notes[notes["part_index"] == index], index, database, config,
+                                 instrument=instrument, warp=warp, feedback=closed,
+                                 transpose_octaves=transpose_octaves)
+        if audio:
+            _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,
+                  diagnostics=diagnostics)
         result.parts.append(rendered)
     if audio:
         result.audio = mix([p.audio for p in result.parts])
     return result
+
+
+def _parts_to_play(notes: pd.DataFrame, parts: list[int] | None,
+                   instrument: str | None) -> list[int]:
+    """The part indices asked for (default the first part); one only with ``instrument``."""
+    parts = parts if parts is not None else choose_parts(notes, None, False)
+    if instrument is not None and len(parts) > 1:
+        raise ParameterError("--instrument applies to a single part (drop --all-parts)")
+    return parts
+
+
+def _sampled_part(part: pd.DataFrame, index: int, database: SamplingDatabase,
+                  config: dict[str, Any], *, instrument: str | None, warp, feedback: bool,
+                  transpose_octaves: bool) -> SampledPart:
+    """The sampled actions of one part's notes (no audio yet)."""
+    name = instrument or str(part["instrument"].iloc[0])
+    perf, targets, choices = sample_part(part, database, config, instrument=name, warp=warp,
+                                         transpose_octaves=transpose_octaves)
+    return SampledPart(index, str(part["part_name"].iloc[0]), name, perf, targets=targets,
+                       choices=choices, feedback=feedback)
+
+
+def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: int, seed: int,
+          diagnostics: bool) -> None:
+    """Synthesize a sampled part in place: open loop, or with ``models`` correcting the force.
+
+    Closed loop, the part's performance becomes what was played (the sampled actions are
+    kept in ``extras["sampled_actions"]``) and contact diagnostics are always recorded.
+    """
+    perf = part.performance
+    if models is not None:
+        y, played, diag = correct_force(perf, models, instrument=part.instrument,
+                                        sample_rate=sample_rate, seed=seed)
+        part.audio = y
+        part.extras["sampled_actions"] = perf.actions
+        part.performance = Performance(played, perf.events, perf.warnings)
+        part.diagnostics = diag
+        return
+    from synth import render_with_diagnostics
+
+    y, diag = render_with_diagnostics(perf.actions, instrument=part.instrument,
+                                      sample_rate=sample_rate, seed=seed,
+                                      diagnostics=diagnostics)
+    part.audio = np.asarray(y, np.float32)
+    part.diagnostics = diag
 
 
 # --------------------------------------------------------------------------- feedback
