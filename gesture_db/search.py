@@ -15,17 +15,13 @@ like a factor of two in duration), so groups of different k weigh alike; the ``n
 cheapest per note go to the Viterbi search (:mod:`gesture_db.search_kernel`), which adds
 ``w_b w_c`` times the continuity cost at every junction without a rest (L1 of the jumps
 in velocity, force and beta between the end of one sample and the start of the next, in
-units of ``continuity_scale``). Weights live in ``gesture_db/config/search.toml``.
+units of ``continuity_scale``). Weights live in ``gesture_db/config/search.toml``
+(:mod:`gesture_db.search_config`).
 """
 
 from __future__ import annotations
 
-import os
-import tomllib
 from dataclasses import dataclass
-from functools import lru_cache
-from importlib import resources
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -34,74 +30,12 @@ import pandas as pd
 from data_schemas.errors import ArcoError, ParameterError
 from data_schemas.sampling import validate_choices, validate_targets
 from gesture_db.groups import CONTOUR_PARAMS, grammar_for
+from gesture_db.search_config import load_search_config
 from gesture_db.search_kernel import path_cost, viterbi
-
-#: Bounds on the number of Viterbi candidates per note.
-MAX_N_BEST = 1024
 
 
 class EmptyGroupsError(ArcoError):
     """No compatible database sample exists for some note groups of the score."""
-
-
-# --------------------------------------------------------------------------- configuration
-
-
-@lru_cache(maxsize=1)
-def _default_text() -> str:
-    return resources.files("gesture_db").joinpath("config/search.toml").read_text("utf-8")
-
-
-def load_search_config(path: str | os.PathLike | None = None,
-                       overrides: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The shipped search settings merged with a user TOML file and/or a dict, validated.
-
-    Raises
-    ------
-    ParameterError
-        Missing or unreadable file, unknown key, negative weight (naming file and key).
-    """
-    config = tomllib.loads(_default_text())
-    if path is not None:
-        p = Path(path)
-        if not p.is_file():
-            raise ParameterError(f"search config {p} not found")
-        try:
-            user = tomllib.loads(p.read_text("utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise ParameterError(f"search config {p}: not TOML ({exc})") from None
-        _merge(config, user, str(p), "")
-    if overrides:
-        _merge(config, overrides, "<overrides>", "")
-    _validate(config)
-    return config
-
-
-def _merge(base: dict, over: dict, source: str, prefix: str) -> None:
-    for key, value in over.items():
-        name = f"{prefix}{key}"
-        open_table = prefix == "fallback.technique."
-        if key not in base and not open_table:
-            raise ParameterError(f"search config {source}: unknown key '{name}'")
-        if isinstance(value, dict) and isinstance(base.get(key), dict):
-            _merge(base[key], value, source, f"{name}.")
-        else:
-            base[key] = value
-
-
-def _validate(config: dict) -> None:
-    n = config["n_best"]
-    if not isinstance(n, int) or not 1 <= n <= MAX_N_BEST:
-        raise ParameterError(f"search config: n_best={n!r} must be an integer in 1..{MAX_N_BEST}")
-    for section in ("weights", "continuity_scale"):
-        for key, value in config[section].items():
-            if not isinstance(value, int | float) or value < 0:
-                raise ParameterError(f"search config: {section}.{key}={value!r} must be >= 0")
-    for key, value in config["continuity_scale"].items():
-        if value <= 0:
-            raise ParameterError(f"search config: continuity_scale.{key}={value!r} must be > 0")
-    if config["costs"]["dynamic_span"] <= 0:
-        raise ParameterError("search config: costs.dynamic_span must be > 0")
 
 
 # --------------------------------------------------------------------------- groups
@@ -464,5 +398,4 @@ def _target_costs(t: pd.DataFrame, pred: np.ndarray, gi: GroupIndex,
 
 
 __all__ = ["EmptyGroupsError", "GroupIndex", "SearchIndex", "SearchResult",
-           "build_group_index", "edge_values", "group_distance", "load_search_config",
-           "resolve_groups", "search"]
+           "build_group_index", "edge_values", "group_distance", "resolve_groups", "search"]

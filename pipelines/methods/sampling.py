@@ -78,7 +78,8 @@ def open_database(path: str | os.PathLike, *, search_config: str | os.PathLike |
     """
     from gesture_db.assemble import ContourSource
     from gesture_db.predict import load_or_fit_predictors
-    from gesture_db.search import SearchIndex, load_search_config
+    from gesture_db.search import SearchIndex
+    from gesture_db.search_config import load_search_config
     from gesture_db.store import GestureDB
 
     db = GestureDB(path)
