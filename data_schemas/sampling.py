@@ -2,9 +2,10 @@
 
 - :data:`SAMPLING_TARGETS`: one row per bowed note of one part, written by
   :mod:`pipelines.methods.sampling` from the notes table (with the string, finger and bow direction
-  the rules chose) and read by :mod:`gesture_db.search` and :mod:`gesture_db.render`.
+  the rules chose) and read by :mod:`gesture_db.search` and :mod:`gesture_db.assemble`.
 - :data:`SAMPLE_CHOICES`: one row per target, the database note chosen by the search and its
-  costs; written by :func:`gesture_db.search.search`, read by the rendering and the reports.
+  costs; written by :func:`gesture_db.search.search`, read by
+  :func:`gesture_db.assemble.assemble_actions` and the reports.
 
 Effective string lengths are violin-equivalent metres (``0.325 m * (1 - finger_ratio)``):
 the gesture database holds violin recordings, so viola and cello notes are compared by their

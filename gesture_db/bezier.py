@@ -9,7 +9,8 @@ C0 joins. Segment ``k`` spans a share ``s_k`` of the note, runs from value ``y_k
 with ``dy = y_{k+1} - y_k``, Bernstein polynomials ``b0..b3`` and ``u`` linear in time, so
 the curve stays between its end values; ``r1 = 0`` gives zero slope at the start,
 ``r2 = 1`` at the end (the grammar's slope constraints). Segment boundaries are chosen by
-dynamic programming over candidate frames, the handles by least squares in the unit box.
+dynamic programming over candidate frames, the handles by least squares in the unit box
+(the numba kernels: :mod:`gesture_db.bezier_kernel`).
 
 The vector of one parameter is ``[s_1..s_n, y_0..y_n, r1_1, r2_1, ..., r1_n, r2_n]``
 (4 n + 1 numbers); a note's vector concatenates the parameters of its grammar.
@@ -18,127 +19,9 @@ The vector of one parameter is ``[s_1..s_n, y_0..y_n, r1_1, r2_1, ..., r1_n, r2_
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from gesture_db.bezier_kernel import best_boundaries
 from gesture_db.groups import CONTOUR_PARAMS, Grammar
-
-
-@njit(cache=True)
-def _bernstein(u):  # pragma: no cover - numba
-    v = 1.0 - u
-    return v * v * v, 3.0 * u * v * v, 3.0 * u * u * v, u * u * u
-
-
-@njit(cache=True)
-def _segment_fit(y, a, b, ya, yb, f_start, f_end):  # pragma: no cover - numba
-    """Least-squares handle ratios of one segment over frames a..b (inclusive).
-
-    Returns (sse, r1, r2) with r1, r2 in [0, 1]; r1 = 0 if f_start, r2 = 1 if f_end.
-    """
-    d = yb - ya
-    n = b - a
-    s11 = 0.0
-    s12 = 0.0
-    s22 = 0.0
-    t1 = 0.0
-    t2 = 0.0
-    zz = 0.0
-    for i in range(a, b + 1):
-        u = (i - a) / n
-        b0, b1, b2, b3 = _bernstein(u)
-        z = y[i] - ya * (b0 + b1 + b2) - yb * b3
-        g1 = d * b1
-        g2 = d * b2
-        s11 += g1 * g1
-        s12 += g1 * g2
-        s22 += g2 * g2
-        t1 += g1 * z
-        t2 += g2 * z
-        zz += z * z
-    best = np.inf
-    r1b = 0.0
-    r2b = 1.0
-    # candidates: interior optimum, then each edge of the box with the other ratio optimal
-    det = s11 * s22 - s12 * s12
-    for case in range(5):
-        if case == 0:
-            if f_start or f_end or det <= 1e-18:
-                continue
-            r1 = (t1 * s22 - t2 * s12) / det
-            r2 = (t2 * s11 - t1 * s12) / det
-            if r1 < 0.0 or r1 > 1.0 or r2 < 0.0 or r2 > 1.0:
-                continue
-        elif case <= 2:  # r1 fixed at 0 or 1
-            r1 = 0.0 if case == 1 else 1.0
-            if f_start and r1 != 0.0:
-                continue
-            if f_end:
-                r2 = 1.0
-            else:
-                r2 = (t2 - r1 * s12) / s22 if s22 > 1e-18 else 0.5
-                r2 = min(max(r2, 0.0), 1.0)
-        else:  # r2 fixed at 0 or 1
-            r2 = 0.0 if case == 3 else 1.0
-            if f_end and r2 != 1.0:
-                continue
-            if f_start:
-                r1 = 0.0
-            else:
-                r1 = (t1 - r2 * s12) / s11 if s11 > 1e-18 else 0.5
-                r1 = min(max(r1, 0.0), 1.0)
-        sse = zz - 2 * (r1 * t1 + r2 * t2) + r1 * r1 * s11 + 2 * r1 * r2 * s12 + r2 * r2 * s22
-        if sse < best:
-            best = sse
-            r1b = r1
-            r2b = r2
-    return max(best, 0.0), r1b, r2b
-
-
-@njit(cache=True)
-def _bezier_dp(y, ys, cand, flags):  # pragma: no cover - numba
-    """Best boundaries (indices into cand) for len(flags) segments from cand[0] to cand[-1].
-
-    Returns (sse, boundary candidate indices [n_seg + 1], ratios [n_seg, 2]).
-    """
-    C = cand.size
-    S = flags.shape[0]
-    acc = np.full((S + 1, C), np.inf)
-    back = np.zeros((S + 1, C), np.int64)
-    acc[0, 0] = 0.0
-    for k in range(1, S + 1):
-        fs = flags[k - 1, 0] != 0
-        fe = flags[k - 1, 1] != 0
-        for j in range(k, C):
-            if k == S and j != C - 1:
-                continue
-            best = np.inf
-            arg = 0
-            for i in range(k - 1, j):
-                if acc[k - 1, i] == np.inf:
-                    continue
-                if k == 1 and i != 0:
-                    continue
-                a = cand[i]
-                b = cand[j]
-                sse, _r1, _r2 = _segment_fit(y, a, b, ys[a], ys[b], fs, fe)
-                cost = acc[k - 1, i] + sse
-                if cost < best:
-                    best = cost
-                    arg = i
-            acc[k, j] = best
-            back[k, j] = arg
-    bounds = np.zeros(S + 1, np.int64)
-    bounds[S] = C - 1
-    for k in range(S, 0, -1):
-        bounds[k - 1] = back[k, bounds[k]]
-    ratios = np.zeros((S, 2))
-    for k in range(S):
-        a = cand[bounds[k]]
-        b = cand[bounds[k + 1]]
-        _s, r1, r2 = _segment_fit(y, a, b, ys[a], ys[b], flags[k, 0] != 0, flags[k, 1] != 0)
-        ratios[k, 0] = r1
-        ratios[k, 1] = r2
-    return acc[S, C - 1], bounds, ratios
 
 
 def candidate_frames(n: int, n_segments: int, *, max_candidates: int = 24) -> np.ndarray:
@@ -193,7 +76,7 @@ def fit_segments(y: np.ndarray, flags: np.ndarray, *,
     if cand.size < S + 1:  # too short for the grammar: repeat frames (zero-length segments)
         cand = np.sort(np.r_[cand, np.full(S + 1 - cand.size, n - 1)])
         return _degenerate(ys, cand, S, y)
-    _sse, bounds, ratios = _bezier_dp(y, ys, cand, flags)
+    _sse, bounds, ratios = best_boundaries(y, ys, cand, flags)
     frames = cand[bounds]
     vec = np.concatenate([np.diff(frames) / (n - 1), ys[frames], ratios.ravel()])
     # interior boundary frames were counted by both neighbouring segments

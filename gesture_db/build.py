@@ -125,24 +125,10 @@ def build_database(sources: list[str | os.PathLike], out: str | os.PathLike, *,
     params = params or BuildParams()
     db = Path(out)
     previous = read_manifest(db) if (db / MANIFEST_NAME).exists() else None
-    resolved = resolve_sources(sources)
-    digests = [s.digest() for s in resolved]
     kept: dict[str, dict] = dict(previous["sources"]) if (previous and append) else {}
-    todo: list[tuple[Source, str]] = []
-    seen = set(kept)
-    for src, dig in zip(resolved, digests, strict=True):
-        if dig not in seen:
-            todo.append((src, dig))
-            seen.add(dig)
+    todo = _new_sources(resolve_sources(sources), set(kept))
     db.mkdir(parents=True, exist_ok=True)
-    results: dict[str, dict] = {}
-    pending = []
-    for src, dig in todo:  # resume: sources written by an interrupted build
-        done = read_source(db, dig)
-        if done is not None:
-            results[dig] = done[1]
-        else:
-            pending.append((src, dig))
+    results, pending = _resume(db, todo)
     resumed = len(results)
     bar = tqdm(total=len(pending), desc="build-db", unit="source", disable=not progress)
     for dig, (notes, contours, stats) in _run(pending, params, workers, scheduler):
@@ -163,6 +149,32 @@ def build_database(sources: list[str | os.PathLike], out: str | os.PathLike, *,
     write_manifest(manifest, db)
     remove_unlisted(db, read_manifest(db))
     return read_manifest(db)
+
+
+def _new_sources(resolved: list[Source], known: set[str]) -> list[tuple[Source, str]]:
+    """The sources (with their digests) not in ``known``, each content once."""
+    todo: list[tuple[Source, str]] = []
+    seen = set(known)
+    for src in resolved:
+        dig = src.digest()
+        if dig not in seen:
+            todo.append((src, dig))
+            seen.add(dig)
+    return todo
+
+
+def _resume(db: Path, todo: list[tuple[Source, str]]) -> tuple[dict[str, dict],
+                                                               list[tuple[Source, str]]]:
+    """Statistics of the sources an interrupted build already wrote, and those still to do."""
+    results: dict[str, dict] = {}
+    pending = []
+    for src, dig in todo:
+        done = read_source(db, dig)
+        if done is not None:
+            results[dig] = done[1]
+        else:
+            pending.append((src, dig))
+    return results, pending
 
 
 def _source_entry(stats: dict) -> dict:

@@ -11,7 +11,9 @@ import pandas as pd
 
 from gesture_db.bezier import fit_note
 from gesture_db.groups import CONTOUR_PARAMS, chain_positions, grammar_for, group_names
-from gesture_db.segment import detect_events, detect_notes, refine_boundaries, score_segmentation
+from gesture_db.segment import detect_notes, refine_boundaries
+from gesture_db.segment_events import detect_events
+from gesture_db.segment_score import score_segmentation
 from gesture_db.simulate import _DYN_F, _DYN_LEVEL, OPEN_STRINGS, STRING_LENGTH
 
 _CONTOUR_COLS = ("bow_velocity", "bow_force", "beta", "bow_position", "finger_ratio")
@@ -140,7 +142,7 @@ def _blind_notes(rec: pd.DataFrame, events) -> pd.DataFrame:
                       for a, b in zip(det["onset"], det["offset"], strict=True)]) if n else []
     dynamic = np.clip(np.interp(force, _DYN_F, _DYN_LEVEL), 0, 9) if n else []
     # slur: consecutive notes in one bow direction whose boundary is a finger change
-    from gesture_db.segment import FINGER, START
+    from gesture_db.segment_events import FINGER, START
 
     kind = det["kind"].to_numpy()
     offs = det["offset"].to_numpy()

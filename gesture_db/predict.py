@@ -248,31 +248,48 @@ def fit_predictors(db, *, candidates: tuple[str, ...] = DEFAULT_CANDIDATES,
                       disable=not progress):
         rows = np.flatnonzero(notes["group"].to_numpy() == group)
         F = np.vstack(notes["features"].to_numpy()[rows]).astype(np.float64)
-        X = X_all[rows]
         rec = (notes["source_hash"].astype(str) + ":"
                + notes["recording_id"].astype(str)).to_numpy()[rows]
-        scale = np.maximum(F.std(axis=0), 1e-9)
-        n_rec = np.unique(rec).size
-        scores: dict[str, float] = {}
-        if len(rows) >= MIN_NOTES and n_rec >= MIN_RECORDINGS:
-            sel = rows if len(rows) <= max_notes else None
-            idx = (np.arange(len(rows)) if sel is not None
-                   else np.sort(rng.choice(len(rows), max_notes, replace=False)))
-            for name in candidates:
-                scores[name] = _loro_mae(name, X[idx], F[idx], rec[idx], scale, seed,
-                                         max_folds)
-            best = min(scores, key=lambda k: (scores[k], CANDIDATES.index(k)))
-            # The reported error: the chosen model, truly leave-one-recording-out on all notes.
-            mae = _loro_mae(best, X, F, rec, scale, seed, max_folds=n_rec)
-        else:
-            best, mae = "mean", float("nan")
-        est = _make(best, seed)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            est.fit(X, F)
-        out[group] = GroupPredictor(best, est, scale, mae, scores, len(rows), n_rec)
+        out[group] = _fit_group(X_all[rows], F, rec, candidates, rng, max_notes=max_notes,
+                                max_folds=max_folds, seed=seed)
     meta = _meta(db, out)
     return Predictors(out, meta)
+
+
+def _fit_group(X: np.ndarray, F: np.ndarray, rec: np.ndarray, candidates: tuple[str, ...],
+               rng: np.random.Generator, *, max_notes: int, max_folds: int,
+               seed: int) -> GroupPredictor:
+    """Choose, score and fit the regressor of one group.
+
+    Parameters
+    ----------
+    X : np.ndarray [shape=(n, c)]
+        Context features of the group's notes.
+    F : np.ndarray [shape=(n, k)]
+        Their PCA features (the regression targets).
+    rec : np.ndarray [shape=(n,)], str
+        Recording of each note (the cross-validation groups).
+    candidates, max_notes, max_folds, seed
+        As :func:`fit_predictors`; ``rng`` draws the subsample of a large group.
+    """
+    scale = np.maximum(F.std(axis=0), 1e-9)
+    n_rec = np.unique(rec).size
+    scores: dict[str, float] = {}
+    if len(F) >= MIN_NOTES and n_rec >= MIN_RECORDINGS:
+        idx = (np.arange(len(F)) if len(F) <= max_notes
+               else np.sort(rng.choice(len(F), max_notes, replace=False)))
+        for name in candidates:
+            scores[name] = _loro_mae(name, X[idx], F[idx], rec[idx], scale, seed, max_folds)
+        best = min(scores, key=lambda k: (scores[k], CANDIDATES.index(k)))
+        # The reported error: the chosen model, truly leave-one-recording-out on all notes.
+        mae = _loro_mae(best, X, F, rec, scale, seed, max_folds=n_rec)
+    else:
+        best, mae = "mean", float("nan")
+    est = _make(best, seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est.fit(X, F)
+    return GroupPredictor(best, est, scale, mae, scores, len(F), n_rec)
 
 
 def _meta(db, groups: dict[str, GroupPredictor]) -> dict[str, Any]:

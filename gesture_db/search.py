@@ -15,17 +15,13 @@ like a factor of two in duration), so groups of different k weigh alike; the ``n
 cheapest per note go to the Viterbi search (:mod:`gesture_db.search_kernel`), which adds
 ``w_b w_c`` times the continuity cost at every junction without a rest (L1 of the jumps
 in velocity, force and beta between the end of one sample and the start of the next, in
-units of ``continuity_scale``). Weights live in ``gesture_db/config/search.toml``.
+units of ``continuity_scale``). Weights live in ``gesture_db/config/search.toml``
+(:mod:`gesture_db.search_config`).
 """
 
 from __future__ import annotations
 
-import os
-import tomllib
 from dataclasses import dataclass
-from functools import lru_cache
-from importlib import resources
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -34,74 +30,12 @@ import pandas as pd
 from data_schemas.errors import ArcoError, ParameterError
 from data_schemas.sampling import validate_choices, validate_targets
 from gesture_db.groups import CONTOUR_PARAMS, grammar_for
+from gesture_db.search_config import load_search_config
 from gesture_db.search_kernel import path_cost, viterbi
-
-#: Bounds on the number of Viterbi candidates per note.
-MAX_N_BEST = 1024
 
 
 class EmptyGroupsError(ArcoError):
     """No compatible database sample exists for some note groups of the score."""
-
-
-# --------------------------------------------------------------------------- configuration
-
-
-@lru_cache(maxsize=1)
-def _default_text() -> str:
-    return resources.files("gesture_db").joinpath("config/search.toml").read_text("utf-8")
-
-
-def load_search_config(path: str | os.PathLike | None = None,
-                       overrides: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The shipped search settings merged with a user TOML file and/or a dict, validated.
-
-    Raises
-    ------
-    ParameterError
-        Missing or unreadable file, unknown key, negative weight (naming file and key).
-    """
-    config = tomllib.loads(_default_text())
-    if path is not None:
-        p = Path(path)
-        if not p.is_file():
-            raise ParameterError(f"search config {p} not found")
-        try:
-            user = tomllib.loads(p.read_text("utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise ParameterError(f"search config {p}: not TOML ({exc})") from None
-        _merge(config, user, str(p), "")
-    if overrides:
-        _merge(config, overrides, "<overrides>", "")
-    _validate(config)
-    return config
-
-
-def _merge(base: dict, over: dict, source: str, prefix: str) -> None:
-    for key, value in over.items():
-        name = f"{prefix}{key}"
-        open_table = prefix == "fallback.technique."
-        if key not in base and not open_table:
-            raise ParameterError(f"search config {source}: unknown key '{name}'")
-        if isinstance(value, dict) and isinstance(base.get(key), dict):
-            _merge(base[key], value, source, f"{name}.")
-        else:
-            base[key] = value
-
-
-def _validate(config: dict) -> None:
-    n = config["n_best"]
-    if not isinstance(n, int) or not 1 <= n <= MAX_N_BEST:
-        raise ParameterError(f"search config: n_best={n!r} must be an integer in 1..{MAX_N_BEST}")
-    for section in ("weights", "continuity_scale"):
-        for key, value in config[section].items():
-            if not isinstance(value, int | float) or value < 0:
-                raise ParameterError(f"search config: {section}.{key}={value!r} must be >= 0")
-    for key, value in config["continuity_scale"].items():
-        if value <= 0:
-            raise ParameterError(f"search config: continuity_scale.{key}={value!r} must be > 0")
-    if config["costs"]["dynamic_span"] <= 0:
-        raise ParameterError("search config: costs.dynamic_span must be > 0")
 
 
 # --------------------------------------------------------------------------- groups
@@ -317,10 +251,41 @@ def search(targets: pd.DataFrame, index: SearchIndex, *, predictors=None,
 
     config = config or load_search_config()
     targets = validate_targets(targets)
-    M = len(targets)
-    if M == 0:
+    if len(targets) == 0:
         raise ParameterError("no target notes to search samples for")
-    wanted = sorted(targets["group"].unique())
+    resolved = _resolve_or_raise(sorted(targets["group"].unique()), index, config)
+    n_best = int(min(config["n_best"], max(len(index.groups[g]) for g, _ in resolved.values())))
+    cands = _Candidates.empty(len(targets), n_best)
+    context = context_features(targets)
+    group_col = targets["group"].to_numpy()
+    for g, (real, dist) in resolved.items():
+        rows = np.flatnonzero(group_col == g)
+        gi = index.groups[real]
+        pred = predictors.predict(real, context[rows]) if predictors is not None else None
+        if pred is None:
+            pred = np.broadcast_to(gi.feature_mean, (rows.size, gi.feature_mean.size))
+        flip = _parts(g)[1] != _parts(real)[1]
+        base = config["weights"]["fallback"] * dist
+        for chunk in _chunks(rows.size, len(gi)):
+            cost, cg = _target_costs(targets.iloc[rows[chunk]], pred[chunk], gi, config)
+            cost += base
+            cands.keep_cheapest(rows[chunk], cost, cg, gi, real, flip)
+    m = np.arange(len(targets))
+    path, total, tc, cc = _best_path(cands, targets, config)
+    chosen = cands.index[m, path]
+    choices = pd.DataFrame({
+        "target_index": m.astype(np.int32),
+        "note_id": [index.groups[cands.used[i]].note_id[chosen[i]] for i in m],
+        "group": group_col, "sample_group": cands.used.astype(str), "mirrored": cands.mirrored,
+        "sample_duration": [index.groups[cands.used[i]].duration[chosen[i]] for i in m],
+        "target_cost": tc, "continuity_cost": cc, "gesture_cost": cands.gesture[m, path]})
+    fallbacks = {g: r for g, (r, d) in resolved.items() if r != g}
+    return SearchResult(validate_choices(choices, source="search"), total, fallbacks)
+
+
+def _resolve_or_raise(wanted: list[str], index: SearchIndex,
+                      config: dict[str, Any]) -> dict[str, tuple[str, float]]:
+    """:func:`resolve_groups` of the wanted groups, or an error naming those left out."""
     resolved = resolve_groups(wanted, sorted(index.groups), config)
     missing = [g for g in wanted if g not in resolved]
     if missing:
@@ -329,60 +294,81 @@ def search(targets: pd.DataFrame, index: SearchIndex, *, predictors=None,
             f"{index.source}: no compatible samples for note group(s) {', '.join(missing)} "
             f"(the database has {have}; raise fallback.max_distance="
             f"{config['fallback']['max_distance']} or add recordings of these groups)")
-    w = config["weights"]
-    N = int(min(config["n_best"], max(len(index.groups[g]) for g, _ in resolved.values())))
-    target = np.full((M, N), np.inf)
-    cand = np.zeros((M, N), np.int64)
-    n_cand = np.zeros(M, np.int64)
-    start = np.zeros((M, N, 3))
-    end = np.zeros((M, N, 3))
-    gesture = np.zeros((M, N))
-    context = context_features(targets)
-    group_col = targets["group"].to_numpy()
-    used = np.empty(M, object)
-    mirrored = np.zeros(M, bool)
-    for g in wanted:
-        rows = np.flatnonzero(group_col == g)
-        real, dist = resolved[g]
-        gi = index.groups[real]
-        used[rows] = real
-        flip = _parts(g)[1] != _parts(real)[1]
-        mirrored[rows] = flip
-        pred = predictors.predict(real, context[rows]) if predictors is not None else None
-        if pred is None:
-            pred = np.broadcast_to(gi.feature_mean, (rows.size, gi.feature_mean.size))
-        base = w["fallback"] * dist
+    return resolved
+
+
+@dataclass
+class _Candidates:
+    """The cheapest samples of every target note (rows: notes, columns: candidates).
+
+    Attributes
+    ----------
+    target, gesture : np.ndarray [shape=(M, N)]
+        Weighted target cost (inf beyond ``n_cand``) and unweighted gesture cost.
+    index : np.ndarray [shape=(M, N)], int
+        Row of each candidate in its group's :class:`GroupIndex`.
+    n_cand : np.ndarray [shape=(M,)], int
+        Candidates per note.
+    start, end : np.ndarray [shape=(M, N, 3)]
+        Velocity (m/s, sign flipped when mirrored), force (N) and beta at each candidate's
+        start and end.
+    used : np.ndarray [shape=(M,)], object
+        Group sampled from.
+    mirrored : np.ndarray [shape=(M,)], bool
+        Whether the samples are of the other bow direction.
+    """
+
+    target: np.ndarray
+    gesture: np.ndarray
+    index: np.ndarray
+    n_cand: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    used: np.ndarray
+    mirrored: np.ndarray
+
+    @classmethod
+    def empty(cls, n_notes: int, n_best: int) -> _Candidates:
+        """No candidates yet for ``n_notes`` notes of up to ``n_best`` candidates."""
+        shape = (n_notes, n_best)
+        return cls(np.full(shape, np.inf), np.zeros(shape), np.zeros(shape, np.int64),
+                   np.zeros(n_notes, np.int64), np.zeros((*shape, 3)), np.zeros((*shape, 3)),
+                   np.empty(n_notes, object), np.zeros(n_notes, bool))
+
+    def keep_cheapest(self, rows: np.ndarray, cost: np.ndarray, cg: np.ndarray,
+                      gi: GroupIndex, group: str, flip: bool) -> None:
+        """Keep the cheapest samples of ``group`` (index ``gi``) for the notes ``rows``.
+
+        ``cost`` and ``cg`` (rows x samples of the group) are the weighted target and the
+        gesture costs; ``flip`` mirrors the samples' velocities (other bow direction).
+        """
+        N = self.target.shape[1]
+        self.used[rows] = group
+        self.mirrored[rows] = flip
         sign = np.array([-1.0, 1.0, 1.0]) if flip else np.ones(3)
-        for chunk in _chunks(rows.size, len(gi)):
-            r = rows[chunk]
-            cost, cg = _target_costs(targets.iloc[r], pred[chunk], gi, config)
-            cost += base
-            k = min(N, len(gi))
-            best = np.argpartition(cost, k - 1, axis=1)[:, :k] if k < len(gi) else \
-                np.broadcast_to(np.arange(k), (r.size, k))
-            order = np.take_along_axis(cost, best, axis=1).argsort(axis=1, kind="stable")
-            best = np.take_along_axis(best, order, axis=1)
-            target[r, :k] = np.take_along_axis(cost, best, axis=1)
-            gesture[r, :k] = np.take_along_axis(cg, best, axis=1)
-            cand[r, :k] = best
-            n_cand[r] = k
-            start[r, :k] = gi.start[best] * sign
-            end[r, :k] = gi.end[best] * sign
+        k = min(N, len(gi))
+        best = np.argpartition(cost, k - 1, axis=1)[:, :k] if k < len(gi) else \
+            np.broadcast_to(np.arange(k), (rows.size, k))
+        order = np.take_along_axis(cost, best, axis=1).argsort(axis=1, kind="stable")
+        best = np.take_along_axis(best, order, axis=1)
+        self.target[rows, :k] = np.take_along_axis(cost, best, axis=1)
+        self.gesture[rows, :k] = np.take_along_axis(cg, best, axis=1)
+        self.index[rows, :k] = best
+        self.n_cand[rows] = k
+        self.start[rows, :k] = gi.start[best] * sign
+        self.end[rows, :k] = gi.end[best] * sign
+
+
+def _best_path(cands: _Candidates, targets: pd.DataFrame, config: dict[str, Any]):
+    """Viterbi path over the candidates, its total cost and its per-note cost parts."""
+    w = config["weights"]
     link = np.r_[False, targets["run_position"].isin(["mid", "end"]).to_numpy()[1:]]
     scale = np.array([config["continuity_scale"][p] for p in CONTOUR_PARAMS])
     w_c = w["basic"] * w["continuity"]
-    path, total = viterbi(target, n_cand, start, end, link, scale=scale, w_c=w_c)
-    tc, cc = path_cost(target, start, end, link, path, scale=scale, w_c=w_c)
-    m = np.arange(M)
-    chosen = cand[m, path]
-    choices = pd.DataFrame({
-        "target_index": m.astype(np.int32),
-        "note_id": [index.groups[used[i]].note_id[chosen[i]] for i in m],
-        "group": group_col, "sample_group": used.astype(str), "mirrored": mirrored,
-        "sample_duration": [index.groups[used[i]].duration[chosen[i]] for i in m],
-        "target_cost": tc, "continuity_cost": cc, "gesture_cost": gesture[m, path]})
-    fallbacks = {g: r for g, (r, d) in resolved.items() if r != g}
-    return SearchResult(validate_choices(choices, source="search"), total, fallbacks)
+    path, total = viterbi(cands.target, cands.n_cand, cands.start, cands.end, link,
+                          scale=scale, w_c=w_c)
+    tc, cc = path_cost(cands.target, cands.start, cands.end, link, path, scale=scale, w_c=w_c)
+    return path, total, tc, cc
 
 
 def _chunks(n_rows: int, n_cand: int, budget: int = 2_000_000) -> list[slice]:
@@ -412,5 +398,4 @@ def _target_costs(t: pd.DataFrame, pred: np.ndarray, gi: GroupIndex,
 
 
 __all__ = ["EmptyGroupsError", "GroupIndex", "SearchIndex", "SearchResult",
-           "build_group_index", "edge_values", "group_distance", "load_search_config",
-           "resolve_groups", "search"]
+           "build_group_index", "edge_values", "group_distance", "resolve_groups", "search"]

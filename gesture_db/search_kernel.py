@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from data_schemas.errors import ParameterError
-from gesture_db.viterbi import backtrack
+from gesture_db.viterbi_kernel import backtrack
 
 
 @njit(cache=True)

@@ -3,17 +3,18 @@
 import itertools
 
 import numpy as np
+import pytest
 from scipy.optimize import lsq_linear
 
+from data_schemas.errors import ParameterError
 from gesture_db.bezier import (
-    _bezier_dp,
-    _segment_fit,
     candidate_frames,
     evaluate_note,
     evaluate_segments,
     fit_note,
     fit_segments,
 )
+from gesture_db.bezier_kernel import _segment_fit, best_boundaries
 from gesture_db.groups import grammar_for
 
 
@@ -70,7 +71,7 @@ def test_dp_kernel_matches_exhaustive_search():
         cand = candidate_frames(40, S, max_candidates=10)
         flags = np.zeros((S, 2), np.int64)
         flags[0, 0] = 1
-        sse, bounds, _ratios = _bezier_dp(y, ys, cand, flags)
+        sse, bounds, _ratios = best_boundaries(y, ys, cand, flags)
         assert bounds[0] == 0 and bounds[-1] == cand.size - 1
         assert abs(sse - _naive_dp(y, ys, cand, flags)) < 1e-6
 
@@ -99,3 +100,13 @@ def test_fit_note_round_trip_with_noise():
     q, rms = fit_note(noisy, g)
     assert q.size == g.dim
     assert all(r < 0.006 for r in rms.values())
+
+
+def test_best_boundaries_rejects_bad_candidates():
+    y = np.linspace(0, 1, 10)
+    flags = np.zeros((2, 2), np.int64)
+    for cand in (np.array([0, 9]), np.array([0, 5, 5, 9]), np.array([0, 4, 10])):
+        with pytest.raises(ParameterError, match="candidate frames"):
+            best_boundaries(y, y, cand, flags)
+    with pytest.raises(ParameterError, match="smoothed"):
+        best_boundaries(y, y[:-1], np.arange(10), flags)

@@ -3,12 +3,9 @@
 import numpy as np
 import pytest
 
-from gesture_db.segment import (
-    _viterbi_kernel,
-    detect_notes,
-    refine_boundaries,
-    score_segmentation,
-)
+from gesture_db.segment import detect_notes, refine_boundaries
+from gesture_db.segment_kernel import viterbi_boundaries
+from gesture_db.segment_score import score_segmentation
 from gesture_db.simulate import PERFORMERS, perform, recording_script
 
 
@@ -80,7 +77,7 @@ def test_viterbi_kernel_matches_exhaustive_search():
         local = rng.uniform(0, 1, (K, C))
         n_cand = rng.integers(1, C + 1, K)
         link = rng.integers(0, 2, K)
-        got = _viterbi_kernel(cand, local, n_cand, nominal, link, 0.3, 0.03)
+        got = viterbi_boundaries(cand, local, n_cand, nominal, link, w_ioi=0.3, min_gap=0.03)
         want = _naive_viterbi(cand, local, n_cand, nominal, link, 0.3, 0.03)
         args = (cand, local, nominal, link)
         assert abs(_path_cost(got, *args) - _path_cost(want, *args)) < 1e-9
@@ -92,3 +89,15 @@ def _path_cost(p, cand, local, nominal, link):
     ioi = np.diff(nominal)
     z = (np.diff(t) - ioi) / (0.2 * np.abs(ioi) + 0.01)
     return local[rows, p].sum() + 0.3 * np.sum((z**2)[link[1:].astype(bool)])
+
+
+def test_viterbi_boundaries_rejects_inconsistent_shapes():
+    from data_schemas.errors import ParameterError
+
+    cand = np.zeros((3, 2))
+    with pytest.raises(ParameterError, match="shape"):
+        viterbi_boundaries(cand, np.zeros((3, 3)), np.ones(3, int), np.arange(3.0), np.ones(3))
+    with pytest.raises(ParameterError, match="n_cand"):
+        viterbi_boundaries(cand, cand, np.array([1, 0, 2]), np.arange(3.0), np.ones(3))
+    assert viterbi_boundaries(np.zeros((0, 1)), np.zeros((0, 1)), np.zeros(0, int),
+                              np.zeros(0), np.zeros(0)).shape == (0,)

@@ -103,11 +103,11 @@ def test_joined_signals_are_continuous(bow_change):
 # --------------------------------------------------------------------------- reproduction
 
 
-def test_rendering_a_take_from_its_own_database_reproduces_it(tiny_db):
+def test_assembling_a_take_from_its_own_database_reproduces_it(tiny_db):
     from data_schemas.annotation import read_annotation
     from data_schemas.recording import read_recording
+    from gesture_db.assemble import ContourSource, assemble_actions
     from gesture_db.predict import load_predictors
-    from gesture_db.render import ContourSource, render_samples
     from gesture_db.search import SearchIndex, search
     from gesture_db.store import GestureDB
 
@@ -117,7 +117,7 @@ def test_rendering_a_take_from_its_own_database_reproduces_it(tiny_db):
     rec = read_recording(str(take).replace(".annotation", ""))
     targets = _targets(ann)
     result = search(targets, SearchIndex.from_db(db), predictors=load_predictors(db))
-    actions = render_samples(targets, result.choices, ContourSource(db))
+    actions = assemble_actions(targets, result.choices, ContourSource(db))
     assert actions["bow_position"].between(0, 1).all()
     t = rec["time"].to_numpy()
     inside = np.zeros(t.size, bool)

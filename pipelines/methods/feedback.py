@@ -20,6 +20,7 @@ import pandas as pd
 from data_schemas.actions import validate_actions
 from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
 from data_schemas.errors import ParameterError
+from data_schemas.instruments import limits, semitones_of
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Performance
 from pipelines.perform.instruments import get_instrument
@@ -60,11 +61,10 @@ def hop_plan(perf: Performance, config: dict[str, Any], instrument: str, *,
     """
     actions = perf.actions
     inst = get_instrument(instrument)
-    n_strings = len(inst.open_strings)
     end = float(actions["time"].max()) if len(actions) else 0.0
     n = int(np.ceil(end * sample_rate / HOP)) + 1
     t = (np.arange(n) + 1) * HOP / sample_rate
-    shape = (n, n_strings)
+    shape = (n, len(inst.open_strings))
     plan = HopPlan(np.zeros(shape, bool), np.zeros(shape), np.full(shape, 0.1), np.zeros(shape),
                    np.ones(shape), np.zeros(shape), np.full(shape, "mf", object),
                    np.zeros(shape, bool), np.zeros(shape, bool), [[] for _ in range(n)])
@@ -72,55 +72,86 @@ def hop_plan(perf: Performance, config: dict[str, Any], instrument: str, *,
     events = perf.events.sort_values("t0", kind="stable")
     for s, rows in actions.groupby("string", sort=True):
         s = int(s)
-        bowed_rows = rows[~rows["pluck"]]
         for p in rows.loc[rows["pluck"], "time"]:
             plan.plucks[min(int(p * sample_rate // HOP), n - 1)].append(s)
+        bowed_rows = rows[~rows["pluck"]]
         if bowed_rows.empty:
             continue
-        time = bowed_rows["time"].to_numpy(np.float64).copy()
-        for i in np.flatnonzero(np.diff(time) <= 0.0) + 1:
-            time[i] = max(time[i], time[i - 1] + 1e-9)
-
-        def at(column: str, rows: pd.DataFrame = bowed_rows, time: np.ndarray = time):
-            return np.interp(t, time, rows[column].to_numpy(np.float64))
-
-        inside = (t >= time[0]) & (t <= time[-1])
-        span[:, s] = inside
-        force = at("bow_force")
-        velocity = at("bow_velocity")
-        semis = -12.0 * np.log2(1.0 - np.clip(at("finger_ratio"), 0.0, 0.8))
-        semis = np.round(semis, 3)
-        bowed = inside & (force > 0.0)
-        plan.bowed[:, s] = bowed
-        plan.velocity[:, s] = np.where(bowed, velocity, 0.0)
-        plan.beta[:, s] = at("beta")
-        plan.semitones[:, s] = semis
-        open_f0 = 440.0 * 2.0 ** ((inst.open_strings[s] - 69) / 12.0)
-        plan.expected_f0[:, s] = open_f0 * 2.0 ** (semis / 12.0)
-        ev = events[events["string"] == s]
-        if len(ev):
-            which = np.clip(np.searchsorted(ev["t0"].to_numpy(), t, side="right") - 1, 0,
-                            len(ev) - 1)
-            level = ev["dynamic"].to_numpy(np.float64)[which]
-        else:
-            level = np.full(n, 5.0)
-        plan.target_speed[:, s] = dynamic_table(config, "velocity", level)
-        plan.dynamic[:, s] = lane_of(level)
-        sign = np.sign(velocity)
-        prev_bowed = np.concatenate([[False], bowed[:-1]])
-        prev_sign = np.concatenate([[0.0], sign[:-1]])
-        reversal = (sign != 0) & (prev_sign != 0) & (sign != prev_sign)
-        # A reversal through rest: the bow stops (sign 0) then moves the other way.
-        moving = np.flatnonzero(sign != 0)
-        through_rest = np.zeros(n, bool)
-        if moving.size > 1:
-            jumps = moving[1:][(np.diff(moving) > 1) & (sign[moving[1:]] != sign[moving[:-1]])]
-            through_rest[jumps] = True
-        start = bowed & (~prev_bowed | reversal | through_rest)
-        plan.note_start[:, s] = start
-        prev_semis = np.concatenate([[semis[0]], semis[:-1]])
-        plan.finger_change[:, s] = bowed & ~start & (np.abs(semis - prev_semis) > 0.05)
+        span[:, s] = _plan_string(plan, s, bowed_rows, t, inst.open_strings[s],
+                                  _dynamic_levels(events[events["string"] == s], t), config)
     return plan, span
+
+
+def _plan_string(plan: HopPlan, s: int, rows: pd.DataFrame, t: np.ndarray, open_pitch: int,
+                 level: np.ndarray, config: dict[str, Any]) -> np.ndarray:
+    """Fill string ``s`` of ``plan`` from its bowed rules frames ``rows`` at hop times ``t``.
+
+    Parameters
+    ----------
+    open_pitch : int
+        MIDI pitch of the open string.
+    level : np.ndarray [shape=(n,)]
+        Dynamic level (0..9) at each hop.
+
+    Returns
+    -------
+    np.ndarray [shape=(n,)], bool
+        Hops inside the string's first..last frame.
+    """
+    time = rows["time"].to_numpy(np.float64).copy()
+    for i in np.flatnonzero(np.diff(time) <= 0.0) + 1:
+        time[i] = max(time[i], time[i - 1] + 1e-9)
+
+    def at(column: str) -> np.ndarray:
+        return np.interp(t, time, rows[column].to_numpy(np.float64))
+
+    inside = (t >= time[0]) & (t <= time[-1])
+    velocity = at("bow_velocity")
+    facts = limits()
+    semis = np.round(semitones_of(np.clip(at("finger_ratio"), 0.0, facts.max_finger_ratio)), 3)
+    bowed = inside & (at("bow_force") > 0.0)
+    plan.bowed[:, s] = bowed
+    plan.velocity[:, s] = np.where(bowed, velocity, 0.0)
+    plan.beta[:, s] = at("beta")
+    plan.semitones[:, s] = semis
+    open_f0 = facts.tuning_a4 * 2.0 ** ((open_pitch - 69) / 12.0)
+    plan.expected_f0[:, s] = open_f0 * 2.0 ** (semis / 12.0)
+    plan.target_speed[:, s] = dynamic_table(config, "velocity", level)
+    plan.dynamic[:, s] = lane_of(level)
+    start = _stroke_starts(bowed, np.sign(velocity))
+    plan.note_start[:, s] = start
+    prev_semis = np.concatenate([[semis[0]], semis[:-1]])
+    plan.finger_change[:, s] = bowed & ~start & (np.abs(semis - prev_semis) > 0.05)
+    return inside
+
+
+def _dynamic_levels(events: pd.DataFrame, t: np.ndarray) -> np.ndarray:
+    """Dynamic level (0..9) at each hop time ``t`` (s): that of the last event started.
+
+    Without events every hop is at level 5 (mf).
+    """
+    if not len(events):
+        return np.full(t.size, 5.0)
+    which = np.clip(np.searchsorted(events["t0"].to_numpy(), t, side="right") - 1, 0,
+                    len(events) - 1)
+    return events["dynamic"].to_numpy(np.float64)[which]
+
+
+def _stroke_starts(bowed: np.ndarray, sign: np.ndarray) -> np.ndarray:
+    """Hops where a bow stroke starts.
+
+    A stroke starts where the bow lands, or where the velocity's ``sign`` reverses: directly,
+    or through a rest (the bow stops, then moves the other way).
+    """
+    prev_bowed = np.concatenate([[False], bowed[:-1]])
+    prev_sign = np.concatenate([[0.0], sign[:-1]])
+    reversal = (sign != 0) & (prev_sign != 0) & (sign != prev_sign)
+    moving = np.flatnonzero(sign != 0)
+    through_rest = np.zeros(sign.size, bool)
+    if moving.size > 1:
+        jumps = moving[1:][(np.diff(moving) > 1) & (sign[moving[1:]] != sign[moving[:-1]])]
+        through_rest[jumps] = True
+    return bowed & (~prev_bowed | reversal | through_rest)
 
 
 def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,

@@ -4,7 +4,7 @@ For each part the rules' front end (:func:`pipelines.perform.rules.build_events`
 string and finger choice, fermatas, slurs, bow directions, articulations) turns the notes
 into events; every bowed event becomes a sampling target (group = technique x direction x
 slur position x run position). The search (:mod:`gesture_db.search`) picks one database
-sample per target, :mod:`gesture_db.render` stretches and joins them into an actions table.
+sample per target, :mod:`gesture_db.assemble` stretches and joins them into an actions table.
 Without listening models (or with ``feedback=False``) the actions play open loop through
 :func:`synth.render_actions`; with models the listening controller
 (:mod:`synth.listening.controller`) corrects the sampled force hop by hop: each string's
@@ -76,9 +76,10 @@ def open_database(path: str | os.PathLike, *, search_config: str | os.PathLike |
     SchemaError
         No database at ``path`` or one of another schema version.
     """
+    from gesture_db.assemble import ContourSource
     from gesture_db.predict import load_or_fit_predictors
-    from gesture_db.render import ContourSource
-    from gesture_db.search import SearchIndex, load_search_config
+    from gesture_db.search import SearchIndex
+    from gesture_db.search_config import load_search_config
     from gesture_db.store import GestureDB
 
     db = GestureDB(path)
@@ -255,7 +256,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     choices : pandas.DataFrame
         The samples chosen (:data:`data_schemas.sampling.SAMPLE_CHOICES`).
     """
-    from gesture_db.render import render_samples
+    from gesture_db.assemble import assemble_actions
     from gesture_db.search import search
     from pipelines.perform.rules import prepare_events
 
@@ -265,7 +266,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     targets, _bowed = targets_from_events(events, notes)
     result = search(targets, database.index, predictors=database.predictors,
                     config=database.search_config)
-    actions = render_samples(targets, result.choices, database.contours)
+    actions = assemble_actions(targets, result.choices, database.contours)
     actions = adapt_forces(actions, _name, database.search_config)
     actions = _extra_rows(actions, events)
     warnings = [f"note group {g} is not in the database; sampled from {r}"
@@ -329,9 +330,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
 
     if sample_rate <= 0:
         raise ParameterError(f"sample_rate={sample_rate} must be > 0")
-    parts = parts if parts is not None else choose_parts(notes, None, False)
-    if instrument is not None and len(parts) > 1:
-        raise ParameterError("--instrument applies to a single part (drop --all-parts)")
+    parts = _parts_to_play(notes, parts, instrument)
     database = db if isinstance(db, SamplingDatabase) else open_database(db)
     config = config or load_config()
     warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
@@ -339,31 +338,61 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
     show = sys.stderr.isatty() if progress is None else progress
     result = RenderResult(None, sample_rate)
     for index in tqdm(parts, desc="sampling", unit="part", disable=not show):
-        part = notes[notes["part_index"] == index]
-        name = instrument or str(part["instrument"].iloc[0])
-        perf, targets, choices = sample_part(part, database, config, instrument=name, warp=warp,
-                                             transpose_octaves=transpose_octaves)
-        rendered = SampledPart(index, str(part["part_name"].iloc[0]), name, perf,
-                               targets=targets, choices=choices, feedback=closed)
-        if audio and closed:
-            y, played, diag = correct_force(perf, models, instrument=name,
-                                            sample_rate=sample_rate, seed=seed)
-            rendered.audio = y
-            rendered.extras["sampled_actions"] = perf.actions
-            rendered.performance = Performance(played, perf.events, perf.warnings)
-            rendered.diagnostics = diag
-        elif audio:
-            from synth import render_with_diagnostics
-
-            y, diag = render_with_diagnostics(perf.actions, instrument=name,
-                                              sample_rate=sample_rate, seed=seed,
-                                              diagnostics=diagnostics)
-            rendered.audio = np.asarray(y, np.float32)
-            rendered.diagnostics = diag
+        rendered = _sampled_part(notes[notes["part_index"] == index], index, database, config,
+                                 instrument=instrument, warp=warp, feedback=closed,
+                                 transpose_octaves=transpose_octaves)
+        if audio:
+            _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,
+                  diagnostics=diagnostics)
         result.parts.append(rendered)
     if audio:
         result.audio = mix([p.audio for p in result.parts])
     return result
+
+
+def _parts_to_play(notes: pd.DataFrame, parts: list[int] | None,
+                   instrument: str | None) -> list[int]:
+    """The part indices asked for (default the first part); one only with ``instrument``."""
+    parts = parts if parts is not None else choose_parts(notes, None, False)
+    if instrument is not None and len(parts) > 1:
+        raise ParameterError("--instrument applies to a single part (drop --all-parts)")
+    return parts
+
+
+def _sampled_part(part: pd.DataFrame, index: int, database: SamplingDatabase,
+                  config: dict[str, Any], *, instrument: str | None, warp, feedback: bool,
+                  transpose_octaves: bool) -> SampledPart:
+    """The sampled actions of one part's notes (no audio yet)."""
+    name = instrument or str(part["instrument"].iloc[0])
+    perf, targets, choices = sample_part(part, database, config, instrument=name, warp=warp,
+                                         transpose_octaves=transpose_octaves)
+    return SampledPart(index, str(part["part_name"].iloc[0]), name, perf, targets=targets,
+                       choices=choices, feedback=feedback)
+
+
+def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: int, seed: int,
+          diagnostics: bool) -> None:
+    """Synthesize a sampled part in place: open loop, or with ``models`` correcting the force.
+
+    Closed loop, the part's performance becomes what was played (the sampled actions are
+    kept in ``extras["sampled_actions"]``) and contact diagnostics are always recorded.
+    """
+    perf = part.performance
+    if models is not None:
+        y, played, diag = correct_force(perf, models, instrument=part.instrument,
+                                        sample_rate=sample_rate, seed=seed)
+        part.audio = y
+        part.extras["sampled_actions"] = perf.actions
+        part.performance = Performance(played, perf.events, perf.warnings)
+        part.diagnostics = diag
+        return
+    from synth import render_with_diagnostics
+
+    y, diag = render_with_diagnostics(perf.actions, instrument=part.instrument,
+                                      sample_rate=sample_rate, seed=seed,
+                                      diagnostics=diagnostics)
+    part.audio = np.asarray(y, np.float32)
+    part.diagnostics = diag
 
 
 # --------------------------------------------------------------------------- feedback

@@ -83,11 +83,8 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
         ``method -> score stem -> figures`` (the content of ``results.json``); a method that
         failed on a score holds ``{"error": message}``.
     """
-    from data_schemas.actions import write_actions
-    from pipelines.audio_io import write_audio
     from pipelines.perform.config import load_config
     from pipelines.reports.html import write_report
-    from pipelines.reports.plots import plot_bowing
     from pipelines.score import read_score
     from pipelines.score.select import choose_parts, select_measures
 
@@ -96,11 +93,7 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
     stems = [Path(s).stem for s in scores]
     if len(set(stems)) != len(stems):
         raise ParameterError(f"scores must have distinct file names, got {stems}")
-    database = None
-    if any(m.startswith("sampling") for m in methods):
-        from pipelines.methods.sampling import open_database
-
-        database = open_database(db, search_config=search_config)
+    database = _sampling_database(methods, db, search_config)
     config = load_config()
     out = Path(out_dir)
     results: dict[str, dict[str, dict[str, Any]]] = {m: {} for m in methods}
@@ -120,22 +113,62 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
                 say(f"{stem}: {method}: error: {exc}")
                 continue
             results[method][stem] = figures
-            wav = out / "audio" / f"{stem}-{method}.wav"
-            write_audio(wav, output.audio, sample_rate)
-            first = output.parts[0]
-            png = out / "plots" / f"{stem}-{method}.png"
-            plot_bowing(first.actions, first.events, png,
-                        title=f"{stem}: {first.part_name} ({first.instrument}), {method}")
-            for p in output.parts:
-                write_actions(p.actions,
-                              out / "actions" / f"{stem}-{method}-{p.part_index}.parquet")
-            media[method][stem] = {"audio": str(wav.relative_to(out)),
-                                   "plot": str(png.relative_to(out))}
+            media[method][stem] = write_media(output, out, stem, method, sample_rate=sample_rate)
             say(f"{stem}: {method}: {figures['render_seconds']:.1f} s, helmholtz share "
                 f"{figures['helmholtz_share']:.3f}")
     write_report(results, out, media=media, methods=METHODS)
     return results
 
 
+def _sampling_database(methods: list[str], db: str | os.PathLike | None,
+                       search_config: str | os.PathLike | None):
+    """The gesture database opened once for the sampling methods (None without them)."""
+    if not any(m.startswith("sampling") for m in methods):
+        return None
+    from pipelines.methods.sampling import open_database
+
+    return open_database(db, search_config=search_config)
+
+
+def write_media(output: MethodOutput, out: Path, stem: str, method: str, *,
+                sample_rate: int) -> dict[str, str]:
+    """Write a render's audio, its first part's bowing plot and every part's actions.
+
+    Files are named ``{stem}-{method}``: ``audio/*.wav``, ``plots/*.png`` and
+    ``actions/*-{part index}.parquet``.
+
+    Parameters
+    ----------
+    output : MethodOutput
+        One method's render of one score.
+    out : Path
+        Report directory.
+    stem : str
+        The score's file stem.
+    method : str
+        The method's name.
+    sample_rate : int, Hz
+
+    Returns
+    -------
+    dict
+        ``audio`` and ``plot`` paths relative to ``out``.
+    """
+    from data_schemas.actions import write_actions
+    from pipelines.audio_io import write_audio
+    from pipelines.reports.plots import plot_bowing
+
+    name = f"{stem}-{method}"
+    wav = out / "audio" / f"{name}.wav"
+    write_audio(wav, output.audio, sample_rate)
+    first = output.parts[0]
+    png = out / "plots" / f"{name}.png"
+    plot_bowing(first.actions, first.events, png,
+                title=f"{stem}: {first.part_name} ({first.instrument}), {method}")
+    for p in output.parts:
+        write_actions(p.actions, out / "actions" / f"{name}-{p.part_index}.parquet")
+    return {"audio": str(wav.relative_to(out)), "plot": str(png.relative_to(out))}
+
+
 __all__ = ["FIGURES", "METHODS", "MethodOutput", "PartOutput", "check_methods", "compare",
-           "evaluate_output", "render_method"]
+           "evaluate_output", "render_method", "write_media"]

@@ -23,7 +23,7 @@ from data_schemas.recording import BOW_LENGTH
 from gesture_db.join import CROSSFADE, Piece, join_run
 from gesture_db.stretch import EDGE, stretch
 
-#: Default control frame rate of rendered actions (Hz), like the recordings.
+#: Default control frame rate of assembled actions (Hz), like the recordings.
 FRAME_RATE = 240.0
 #: Distance kept from the frog and the tip (share of the hair).
 MARGIN = 0.04
@@ -62,11 +62,12 @@ class ContourSource:
                               source=str(self.db.path)) from None
 
 
-def render_samples(targets: pd.DataFrame, choices: pd.DataFrame,
-                   contours: ContourSource | Callable[[str, str], tuple[np.ndarray, np.ndarray]],
-                   *, frame_rate: float = FRAME_RATE, edge: float = EDGE,
-                   crossfade: float = CROSSFADE, bow_length: float = BOW_LENGTH,
-                   margin: float = MARGIN) -> pd.DataFrame:
+def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
+                     contours: ContourSource | Callable[[str, str],
+                                                        tuple[np.ndarray, np.ndarray]],
+                     *, frame_rate: float = FRAME_RATE, edge: float = EDGE,
+                     crossfade: float = CROSSFADE, bow_length: float = BOW_LENGTH,
+                     margin: float = MARGIN) -> pd.DataFrame:
     """Stretch and join the chosen samples into an actions table.
 
     Parameters
@@ -100,14 +101,8 @@ def render_samples(targets: pd.DataFrame, choices: pd.DataFrame,
                              f"margin={margin} must be > 0, > 0 and in [0, 0.5)")
     get = contours.get if isinstance(contours, ContourSource) else contours
     onset = targets["onset"].to_numpy(np.float64)
-    end = onset + targets["duration"].to_numpy(np.float64).copy()
+    end, run_start = _runs(targets)
     direction = np.where(targets["bow_direction"].to_numpy() == "up", -1, 1)
-    run_start = targets["run_position"].isin(["init", "iso"]).to_numpy().copy()
-    run_start[0] = True
-    run_start[1:] |= onset[1:] > end[:-1] + 1e-6
-    # inside a run each note ends where the next begins
-    inner = np.flatnonzero(~run_start[1:])
-    end[inner] = onset[inner + 1]
     pieces = []
     for m in range(len(targets)):
         times, values = get(str(choices["sample_group"].iloc[m]), str(choices["note_id"].iloc[m]))
@@ -116,8 +111,7 @@ def render_samples(targets: pd.DataFrame, choices: pd.DataFrame,
             values[:, 0] = -values[:, 0]
         pieces.append(Piece(onset[m], end[m], _signal(times, values, end[m] - onset[m],
                                                       onset[m], edge), int(direction[m])))
-    starts = np.flatnonzero(run_start)
-    bounds = np.r_[starts, len(targets)]
+    bounds = np.r_[np.flatnonzero(run_start), len(targets)]
     strings = targets["string"].to_numpy(np.int64)
     fingers = targets["finger_ratio"].to_numpy(np.float64)
     parts = []
@@ -130,6 +124,22 @@ def render_samples(targets: pd.DataFrame, choices: pd.DataFrame,
         note = np.clip(np.searchsorted(onset[a:b], t, side="right") - 1, 0, b - a - 1) + a
         parts.append(_rows(t, strings[note], fingers[note], sig, pos[0]))
     return validate_actions(_with_lifts(parts), source="gesture sampling")
+
+
+def _runs(targets: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """Where each note ends (s) and whether it starts a run (notes without rests).
+
+    A run starts at an ``init`` or ``iso`` note and after a rest; inside a run each note ends
+    where the next begins.
+    """
+    onset = targets["onset"].to_numpy(np.float64)
+    end = onset + targets["duration"].to_numpy(np.float64).copy()
+    run_start = targets["run_position"].isin(["init", "iso"]).to_numpy().copy()
+    run_start[0] = True
+    run_start[1:] |= onset[1:] > end[:-1] + 1e-6
+    inner = np.flatnonzero(~run_start[1:])
+    end[inner] = onset[inner + 1]
+    return end, run_start
 
 
 def _signal(times: np.ndarray, values: np.ndarray, duration: float, t0: float, edge: float):
@@ -201,4 +211,4 @@ def _with_lifts(parts: list[pd.DataFrame]) -> pd.DataFrame:
     return table.sort_values("time", kind="stable").reset_index(drop=True)
 
 
-__all__ = ["FRAME_RATE", "MARGIN", "ContourSource", "render_samples"]
+__all__ = ["FRAME_RATE", "MARGIN", "ContourSource", "assemble_actions"]
