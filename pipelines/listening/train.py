@@ -155,7 +155,7 @@ def train_one(instrument: str, string: int, dynamic: str, out_dir: str, *,
     seconds = time.perf_counter() - start
     model.metadata.update(teacher=teacher, train_seconds=seconds,
                           settings={k: v for k, v in asdict(settings).items()
-                                    if k != "controller"})
+                                    if k not in ("controller", "thresholds")})
     save_pair(model, out)
     from synth.listening.classifier import update_metadata
 

@@ -57,9 +57,12 @@ def _play(spec: ClipSpec, settings: TrainingSettings, seed: int, teacher: Teache
     context = yin_window_for(spec.nominal_frequency(), sr) / sr
     clip = render_clip(spec, settle=settings.settle, record=settings.record, seed=seed,
                        context=context, body_seed=settings.body_seed)
-    hops = auto_hop_labels(clip, window_hops=settings.hop_window) if (
-        teacher is auto_label and settings.hop_window > 0) else None
-    return JudgedClip(clip, int(teacher(clip)), hops)
+    automatic = teacher is auto_label
+    hops = auto_hop_labels(clip, window_hops=settings.hop_window,
+                           thresholds=settings.thresholds) if (
+        automatic and settings.hop_window > 0) else None
+    label = auto_label(clip, thresholds=settings.thresholds) if automatic else teacher(clip)
+    return JudgedClip(clip, int(label), hops)
 
 
 def basic_training(instrument: str, string: int, dynamic: str, *,

@@ -122,7 +122,8 @@ def teacher_note_classes(model: PairModel, semitones: float, *, force: float, K:
     string_ref = load_instrument(model.instrument).strings[s].reference_force
     beta = float(plan.beta[0, s])
     return np.array([judge(stats[k], force_ratio=log.force[k, s] / reference_force(
-        string_ref, max(speed[k], 1e-3), beta)) for k in sustained], np.int64)
+        string_ref, max(speed[k], 1e-3), beta), thresholds=settings.thresholds)
+        for k in sustained], np.int64)
 
 
 def stability_cost(classes: np.ndarray) -> float:

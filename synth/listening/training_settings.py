@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from synth.listening.classifier import FINGERS
 from synth.listening.clips import Clip
 from synth.listening.controller import ControllerSettings
+from synth.listening.teacher import TeacherThresholds
 
 #: Vivi's bow lanes: dynamic -> (bow velocity m/s, beta).
 DEFAULT_LANES = {"p": (0.20, 0.14), "mp": (0.26, 0.12), "mf": (0.33, 0.10), "f": (0.40, 0.08)}
@@ -22,7 +23,8 @@ class TrainingSettings:
     ``settle`` and ``record`` (s), fingers (semitones), forces (N), ``grid_step`` (octaves),
     ``hop_window`` (hops) and ``k_note``/``f_note`` (s) size the basic training and the K
     and initial-force searches of :mod:`synth.listening.training`; ``controller`` tunes the
-    control law that plays the practice notes.
+    control law that plays the practice notes and ``thresholds`` are the automatic
+    teacher's (:func:`synth.listening.settings_file.load_listening_settings` reads both).
     """
 
     settle: float = 0.7
@@ -43,6 +45,7 @@ class TrainingSettings:
     f_repeats: int = 2
     f_note: float = 0.45
     controller: ControllerSettings = field(default_factory=ControllerSettings)
+    thresholds: TeacherThresholds = field(default_factory=TeacherThresholds)
 
 
 QUICK = TrainingSettings(settle=0.6, record=0.3, band_clips=1,
