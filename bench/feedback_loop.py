@@ -3,7 +3,7 @@
     python bench/feedback_loop.py --models DIR [--repeats 3] [--json]
 
 Plays the ~30 s scale of ``bench/feedback_speed.py`` once with the real instrument (timed,
-its blocks recorded), then replays :func:`synth.listening.controller.perform` with an
+its blocks recorded), then replays :func:`synth.listening.controller.play_plan` with an
 instrument that returns the recorded blocks, so the loop's own cost is visible: CPU time
 (``time.process_time``) per hop in ``StreamingFeatures.push``, in ``ForceController.step``
 (classifier and control law) and in the rest of the loop. The replay must give the forces
@@ -65,8 +65,8 @@ def main() -> None:
 
     def play(instrument):
         t = time.process_time()
-        log = controller.perform(plan, models, instrument, rng=np.random.default_rng([0, 1]),
-                                 record_diagnostics=True)
+        log = controller.play_plan(plan, models, instrument, rng=np.random.default_rng([0, 1]),
+                                   record_diagnostics=True)
         return time.process_time() - t, log
 
     play(Instrument("violin", seed=0))  # compile / warm up

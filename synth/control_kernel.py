@@ -1,4 +1,4 @@
-"""Control frames -> per-sample bow velocity, force and contact mode (numba, plain arrays)."""
+"""Control frames -> per-sample bow velocity, force and contact (numba, plain arrays)."""
 
 from __future__ import annotations
 
@@ -6,19 +6,19 @@ import math
 
 from numba import njit
 
-from synth.modal_kernel import MODE_BOW, MODE_LIFTED
+from synth.modal_kernel import CONTACT_BOW, CONTACT_LIFTED
 
 
 @njit(cache=True, error_model="numpy")
 def sample_bowing(frame_time, frame_velocity, frame_force, first_sample, sample_rate,
-                  out_velocity, out_force, out_mode):  # pragma: no cover - numba
+                  out_velocity, out_force, out_contact):  # pragma: no cover - numba
     """Interpolate one string's control frames at samples ``first_sample + i``.
 
     Sample i is at time ``(first_sample + i) / sample_rate`` (s). Velocity (m/s) and force
     (N) are linear between frames (times ``frame_time`` in s, increasing) and held beyond
     the ends, as ``numpy.interp``; a sample exactly at a frame takes that frame's values.
-    The mode is MODE_BOW from the first frame to the last wherever the force is positive,
-    else MODE_LIFTED. Walks the frames once; the samples of each segment form one loop.
+    The contact is CONTACT_BOW from the first frame to the last wherever the force is positive,
+    else CONTACT_LIFTED. Walks the frames once; the samples of each segment form one loop.
     """
     n = out_velocity.size
     n_frames = frame_time.size
@@ -30,7 +30,7 @@ def sample_bowing(frame_time, frame_velocity, frame_force, first_sample, sample_
     for i in range(first):
         out_velocity[i] = frame_velocity[0]
         out_force[i] = frame_force[0]
-        out_mode[i] = MODE_LIFTED
+        out_contact[i] = CONTACT_LIFTED
     i = first
     j = 0
     while i < last:
@@ -45,19 +45,19 @@ def sample_bowing(frame_time, frame_velocity, frame_force, first_sample, sample_
         v0, f0 = frame_velocity[j], frame_force[j]
         dv = (frame_velocity[after] - v0) / span if span > 0.0 else 0.0
         df = (frame_force[after] - f0) / span if span > 0.0 else 0.0
-        _fill_segment(out_velocity, out_force, out_mode, i, end,
+        _fill_segment(out_velocity, out_force, out_contact, i, end,
                       (first_sample + i) * period - t0, period, v0, dv, f0, df)
         i = end
     for k in range(last, n):
         out_velocity[k] = frame_velocity[n_frames - 1]
         out_force[k] = frame_force[n_frames - 1]
-        out_mode[k] = MODE_LIFTED
+        out_contact[k] = CONTACT_LIFTED
 
 
 # "reassoc" only lets LLVM vectorise the float sample counter (whole numbers, so exact:
 # the values equal those of an integer counter converted per sample, at half the cost).
 @njit(cache=True, error_model="numpy", fastmath={"reassoc"})
-def _fill_segment(out_velocity, out_force, out_mode, i, end, start, period, v0, dv, f0,
+def _fill_segment(out_velocity, out_force, out_contact, i, end, start, period, v0, dv, f0,
                   df):  # pragma: no cover - numba
     """Samples ``i .. end`` of one segment: value + slope * (start + k period), k = 0, 1, ..."""
     k = 0.0
@@ -67,16 +67,16 @@ def _fill_segment(out_velocity, out_force, out_mode, i, end, start, period, v0, 
         out_force[j] = f0 + df * dt
         k += 1.0
     for j in range(i, end):
-        out_mode[j] = MODE_BOW if out_force[j] > 0.0 else MODE_LIFTED
+        out_contact[j] = CONTACT_BOW if out_force[j] > 0.0 else CONTACT_LIFTED
 
 
 @njit(cache=True, error_model="numpy")
 def ramp_bowing(start_velocity, end_velocity, start_force, end_force, lifted,
-                out_velocity, out_force, out_mode):  # pragma: no cover - numba
+                out_velocity, out_force, out_contact):  # pragma: no cover - numba
     """Ramp velocity (m/s) and force (N) linearly over a block, reaching the end values.
 
-    Sample i of n takes the fraction (i + 1) / n of the way. The mode is MODE_LIFTED
-    everywhere when ``lifted``, else MODE_BOW wherever the force is positive.
+    Sample i of n takes the fraction (i + 1) / n of the way. The contact is CONTACT_LIFTED
+    everywhere when ``lifted``, else CONTACT_BOW wherever the force is positive.
     """
     n = out_velocity.size
     for i in range(n):
@@ -84,4 +84,4 @@ def ramp_bowing(start_velocity, end_velocity, start_force, end_force, lifted,
         force = start_force + (end_force - start_force) * w
         out_velocity[i] = start_velocity + (end_velocity - start_velocity) * w
         out_force[i] = force
-        out_mode[i] = MODE_LIFTED if lifted or force <= 0.0 else MODE_BOW
+        out_contact[i] = CONTACT_LIFTED if lifted or force <= 0.0 else CONTACT_BOW

@@ -41,7 +41,9 @@ class StringInput:
     Attributes
     ----------
     bow_velocity, bow_force : np.ndarray [shape=(n_internal,)], m/s and N
-    contact_mode : np.ndarray [shape=(n_internal,)], int8
+    contact : np.ndarray [shape=(n_internal,)], int8
+        Per sample :data:`synth.modal_kernel.CONTACT_LIFTED`, ``CONTACT_BOW`` or
+        ``CONTACT_GRIP``.
     beta, finger_ratio : np.ndarray [shape=(n_sub_blocks,)]
         One value per :data:`SUB_BLOCK` output samples (a single value when
         ``steady_contact``).
@@ -56,7 +58,7 @@ class StringInput:
 
     bow_velocity: np.ndarray
     bow_force: np.ndarray
-    contact_mode: np.ndarray
+    contact: np.ndarray
     beta: np.ndarray
     finger_ratio: np.ndarray
     pluck_offsets: tuple[int, ...] = ()

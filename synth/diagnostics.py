@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from synth.modal_kernel import CONTACT_NONE, CONTACT_SLIP
+from synth.modal_kernel import OFF_STRING, SLIPPING
 
 #: A slip counts (as an onset) once the string slides past the bow at this share of the
 #: bow's speed. Near the lower force limit the string also releases for 3-4 internal samples
@@ -67,7 +67,7 @@ def _median_interval(first: float, later: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def _summarise(contact, slip_velocity, bow_velocity, counted, onsets):  # pragma: no cover
+def _summarise(stick_slip, slip_velocity, bow_velocity, counted, onsets):  # pragma: no cover
     """Count slips (onset samples written to ``onsets``), slipping and contact samples, slip sum.
 
     ``counted`` says whether the slip under way when the block starts has been counted
@@ -77,8 +77,8 @@ def _summarise(contact, slip_velocity, bow_velocity, counted, onsets):  # pragma
     n_slip = 0
     n_contact = 0
     slip_sum = 0.0
-    for i in range(contact.size):
-        if contact[i] == CONTACT_SLIP:
+    for i in range(stick_slip.size):
+        if stick_slip[i] == SLIPPING:
             n_slip += 1
             slip_sum += slip_velocity[i]
             if not counted and slip_velocity[i] >= SLIP_ONSET_SPEED_RATIO * abs(bow_velocity[i]):
@@ -87,13 +87,13 @@ def _summarise(contact, slip_velocity, bow_velocity, counted, onsets):  # pragma
                 counted = True
         else:
             counted = False
-        if contact[i] != CONTACT_NONE:
+        if stick_slip[i] != OFF_STRING:
             n_contact += 1
     return n_onsets, n_slip, n_contact, slip_sum, counted
 
 
 class OnsetTracker:
-    """Turns per-sample contact states into :class:`ContactDiagnostics`, block after block."""
+    """Turns per-sample stick-slip states into :class:`ContactDiagnostics`, block by block."""
 
     def __init__(self, internal_rate: float) -> None:
         self.internal_rate = float(internal_rate)
@@ -105,24 +105,25 @@ class OnsetTracker:
         self._counted = False
         self._last_onset = np.nan
 
-    def update(self, contact: np.ndarray, slip_velocity: np.ndarray, bow_velocity: np.ndarray,
+    def update(self, stick_slip: np.ndarray, slip_velocity: np.ndarray, bow_velocity: np.ndarray,
                start_sample: int) -> ContactDiagnostics:
         """Summarise a block that starts at internal sample ``start_sample``.
 
         Parameters
         ----------
-        contact : np.ndarray [shape=(n,)], int8
-            Contact state per internal sample (0 none, 1 stick, 2 slip).
+        stick_slip : np.ndarray [shape=(n,)], int8
+            Stick-slip state per internal sample (:data:`synth.modal_kernel.OFF_STRING`,
+            ``STICKING``, ``SLIPPING``).
         slip_velocity : np.ndarray [shape=(n,)], m/s
         bow_velocity : np.ndarray [shape=(n,)], m/s
         start_sample : int
         """
-        if not contact.any():  # bow off the string: nothing to count
+        if not stick_slip.any():  # bow off the string: nothing to count
             self._counted = False
             return ContactDiagnostics(0, 0.0, 0.0, 0.0, float("nan"), _NO_ONSETS)
-        onsets = np.empty(contact.size, np.int64)
+        onsets = np.empty(stick_slip.size, np.int64)
         n_onsets, n_slip, n_contact, slip_sum, self._counted = _summarise(
-            contact, slip_velocity, bow_velocity, self._counted, onsets)
+            stick_slip, slip_velocity, bow_velocity, self._counted, onsets)
         times = (start_sample + onsets[:n_onsets]) / self.internal_rate
         if np.isfinite(self._last_onset):
             period = _median_interval(self._last_onset, times)
@@ -130,7 +131,7 @@ class OnsetTracker:
             period = _median_interval(times[0], times[1:]) if n_onsets else float("nan")
         if n_onsets:
             self._last_onset = float(times[-1])
-        n = max(contact.size, 1)
+        n = max(stick_slip.size, 1)
         return ContactDiagnostics(
             slip_onsets=int(n_onsets),
             slipping_share=n_slip / n,

@@ -36,7 +36,7 @@ from synth.controls import (
 )
 from synth.decimate import Decimator
 from synth.diagnostics import ContactDiagnostics, OnsetTracker, merge_diagnostics
-from synth.modal_kernel import MODE_GRIP, MODE_LIFTED
+from synth.modal_kernel import CONTACT_GRIP, CONTACT_LIFTED
 from synth.strings import InstrumentConstants, load_instrument
 from synth.tracks import DEFAULT_TAIL, play_actions
 from synth.voice import StringOutput, StringVoice
@@ -195,10 +195,10 @@ class Instrument:
             target = new or BowControl(0.0, 0.0, old.beta, old.finger_ratio)
             _check_control(target, s)
             velocity, force = np.empty(n_internal), np.empty(n_internal)
-            mode = np.empty(n_internal, np.int8)
+            contact = np.empty(n_internal, np.int8)
             ramp_bowing(old.bow_velocity, target.bow_velocity, old.bow_force, target.bow_force,
-                        new is None, velocity, force, mode)
-            inputs[s] = StringInput(velocity, force, mode, np.array((target.beta,)),
+                        new is None, velocity, force, contact)
+            inputs[s] = StringInput(velocity, force, contact, np.array((target.beta,)),
                                     np.array((target.finger_ratio,)),
                                     (0,) if s in plucked else (), steady_contact=True)
             self._held[s] = target
@@ -246,7 +246,7 @@ class Instrument:
             if total is None:
                 total = np.empty(n_internal)
                 self._advance_runs(voice, given, StringOutput(total, out.slip_velocity,
-                                                              out.contact))
+                                                              out.stick_slip))
             else:
                 self._advance_runs(voice, given, out)
                 total += out.bridge_force
@@ -260,7 +260,7 @@ class Instrument:
                                               hop * self.oversample)
                 diagnostics[s] = merge_diagnostics(per_hop[s])
             else:
-                diagnostics[s] = self._trackers[s].update(out.contact, out.slip_velocity,
+                diagnostics[s] = self._trackers[s].update(out.stick_slip, out.slip_velocity,
                                                           given.bow_velocity, start)
         bridge = self._decimator.process(np.zeros(n_internal) if total is None else total)
         audio = self._convolver.process(bridge) if self._convolver is not None else bridge
@@ -280,9 +280,9 @@ class Instrument:
     def _track_hops(self, s: int, out: StringOutput, bow_velocity: np.ndarray, start: int,
                     hop: int) -> list[ContactDiagnostics]:
         tracker = self._trackers[s]
-        return [tracker.update(out.contact[i:i + hop], out.slip_velocity[i:i + hop],
+        return [tracker.update(out.stick_slip[i:i + hop], out.slip_velocity[i:i + hop],
                                bow_velocity[i:i + hop], start + i)
-                for i in range(0, out.contact.size, hop)]
+                for i in range(0, out.stick_slip.size, hop)]
 
     def _lifted(self, s: int, n_samples: int) -> StringInput:
         held = self._held[s]
@@ -296,25 +296,25 @@ class Instrument:
         for offset, pull in zip(given.pluck_offsets, pulls, strict=True):
             self._grip_until[s] = start + offset + int(round(
                 pull / PLUCK_SPEED * self.internal_rate))
-        n = given.contact_mode.size
+        n = given.contact.size
         grip_end = min(self._grip_until[s] - start, n)
         if grip_end <= 0:
             return
         first = min(given.pluck_offsets, default=0)
-        given.contact_mode = given.contact_mode.copy()
+        given.contact = given.contact.copy()
         given.bow_velocity = given.bow_velocity.copy()
-        given.contact_mode[first:grip_end] = MODE_GRIP
+        given.contact[first:grip_end] = CONTACT_GRIP
         given.bow_velocity[first:grip_end] = PLUCK_SPEED
         if grip_end < n and self._grip_until[s] - start == grip_end:
             release = slice(grip_end, n)
-            given.contact_mode[release] = np.where(given.bow_force[release] > 0,
-                                                   given.contact_mode[release], MODE_LIFTED)
+            given.contact[release] = np.where(given.bow_force[release] > 0,
+                                              given.contact[release], CONTACT_LIFTED)
 
     def _advance_runs(self, voice: StringVoice, given: StringInput, out: StringOutput) -> None:
         """Call the kernel once per run of sub-blocks sharing beta and finger."""
         if given.steady_contact or (np.all(given.beta == given.beta[0]) and np.all(
                 given.finger_ratio == given.finger_ratio[0])):
-            voice.advance(given.bow_velocity, given.bow_force, given.contact_mode,
+            voice.advance(given.bow_velocity, given.bow_force, given.contact,
                           float(given.beta[0]), float(given.finger_ratio[0]), out)
             return
         per_sub = SUB_BLOCK * self.oversample
@@ -325,9 +325,9 @@ class Instrument:
         for a, b in zip(bounds[:-1], bounds[1:], strict=True):
             lo, hi = a * per_sub, min(b * per_sub, n)
             view = StringOutput(out.bridge_force[lo:hi], out.slip_velocity[lo:hi],
-                                out.contact[lo:hi])
+                                out.stick_slip[lo:hi])
             voice.advance(given.bow_velocity[lo:hi], given.bow_force[lo:hi],
-                          given.contact_mode[lo:hi], float(given.beta[a]),
+                          given.contact[lo:hi], float(given.beta[a]),
                           float(given.finger_ratio[a]), view)
 
 

@@ -14,6 +14,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synth.modal_kernel import (
+    GAIN_BRIDGE_BOW,
+    GAIN_BRIDGE_FINGER,
+    GAIN_G_FB,
+    GAIN_G_FF,
+    GAIN_H_BB,
+    GAIN_H_BF,
+    GAIN_H_FB,
+    GAIN_H_FF,
+    N_COEFFICIENT_ROWS,
+    N_GAINS,
+    ROW_FREE_AA,
+    ROW_FREE_WA,
+    ROW_FREE_WW,
+    ROW_PUSH_A_BOW,
+    ROW_PUSH_A_FINGER,
+    ROW_PUSH_W_BOW,
+    ROW_PUSH_W_FINGER,
+    ROW_READ_BOW_W,
+    ROW_READ_FINGER_A,
+    ROW_READ_FINGER_W,
+    STATE_A,
+    STATE_W,
+)
 from synth.strings import StringConstants
 
 
@@ -139,7 +163,7 @@ class ContactCoefficients:
     shape_finger: np.ndarray
     push_bow: np.ndarray  # (2, n_modes): into a and v
     push_finger: np.ndarray  # (2, n_modes)
-    gains: np.ndarray  # (8,) see contact_coefficients
+    gains: np.ndarray  # (N_GAINS,) see contact_coefficients
     fingered: bool
 
 
@@ -158,7 +182,8 @@ def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float) -> 
     Returns
     -------
     ContactCoefficients
-        ``gains`` holds ``[H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge_per_Fb, bridge_per_Ff]``:
+        ``gains`` holds, at the indices ``synth.modal_kernel.GAIN_*``, ``H_bb, H_bf, G_ff,
+        G_fb, H_ff, H_fb, bridge_per_Fb, bridge_per_Ff``:
         end-of-step bow-point velocity per bow force (H_bb) and per finger force (H_bf), finger
         displacement (G) and velocity (H) per finger and bow force, and the bridge force per
         unit bow and finger force.
@@ -172,12 +197,15 @@ def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float) -> 
     c_aa, c_av, c_va, c_vv = basis.free
     push_b = np.stack([(c_aa * g + c_av * h) * phi_b, (c_va * g + c_vv * h) * phi_b])
     push_f = np.stack([(c_aa * g + c_av * h) * phi_f, (c_va * g + c_vv * h) * phi_f])
-    gains = np.array([
-        np.sum(phi_b * phi_b * h), np.sum(phi_b * phi_f * h),
-        np.sum(phi_f * phi_f * g), np.sum(phi_f * phi_b * g),
-        np.sum(phi_f * phi_f * h), np.sum(phi_f * phi_b * h),
-        np.sum(basis.bridge_gain * g * phi_b), np.sum(basis.bridge_gain * g * phi_f),
-    ])
+    gains = np.empty(N_GAINS)
+    gains[GAIN_H_BB] = np.sum(phi_b * phi_b * h)
+    gains[GAIN_H_BF] = np.sum(phi_b * phi_f * h)
+    gains[GAIN_G_FF] = np.sum(phi_f * phi_f * g)
+    gains[GAIN_G_FB] = np.sum(phi_f * phi_b * g)
+    gains[GAIN_H_FF] = np.sum(phi_f * phi_f * h)
+    gains[GAIN_H_FB] = np.sum(phi_f * phi_b * h)
+    gains[GAIN_BRIDGE_BOW] = np.sum(basis.bridge_gain * g * phi_b)
+    gains[GAIN_BRIDGE_FINGER] = np.sum(basis.bridge_gain * g * phi_f)
     return ContactCoefficients(phi_b, phi_f, push_b, push_f, gains, fingered)
 
 
@@ -216,10 +244,13 @@ def state_scale(basis: ModeBasis) -> np.ndarray:
     np.ndarray [shape=(2, n_modes)]
     """
     c_av = basis.free[1]
-    return np.stack([basis.bridge_gain, basis.bridge_gain * c_av])
+    scale = np.empty((2, basis.n_modes))
+    scale[STATE_A] = basis.bridge_gain
+    scale[STATE_W] = basis.bridge_gain * c_av
+    return scale
 
 
-def pack_coefficients(basis: ModeBasis, contact: ContactCoefficients) -> np.ndarray:
+def pack_coefficients(basis: ModeBasis, coeffs: ContactCoefficients) -> np.ndarray:
     """The per-mode coefficients in the kernel's state coordinates and row order.
 
     With the state (A, W) of :func:`state_scale`, one sample is
@@ -229,20 +260,24 @@ def pack_coefficients(basis: ModeBasis, contact: ContactCoefficients) -> np.ndar
 
     Returns
     -------
-    np.ndarray [shape=(10, padded_modes(n_modes))]
-        Rows: c_aa, c_WA, c_vv; P_Ab, P_Wb, P_Af, P_Wf (N per N of contact force); S_b
-        (m/s per N), S_fA (m per N), S_fW (m/s per N). Aligned, with zero coefficients for
-        the padding modes (they never move).
+    np.ndarray [shape=(N_COEFFICIENT_ROWS, padded_modes(n_modes))]
+        Rows (indices ``synth.modal_kernel.ROW_*``): c_aa, c_WA, c_vv; P_Ab, P_Wb, P_Af,
+        P_Wf (N per N of contact force); S_b (m/s per N), S_fA (m per N), S_fW (m/s per N).
+        Aligned, with zero coefficients for the padding modes (they never move).
     """
     c_aa, c_av, c_va, c_vv = basis.free
-    scale_a, scale_w = state_scale(basis)
-    rows = np.vstack([
-        c_aa, c_av * c_va, c_vv,
-        scale_a * contact.push_bow[0], scale_w * contact.push_bow[1],
-        scale_a * contact.push_finger[0], scale_w * contact.push_finger[1],
-        contact.shape_bow / scale_w, contact.shape_finger / scale_a,
-        contact.shape_finger / scale_w,
-    ])
-    packed = aligned_zeros((rows.shape[0], padded_modes(basis.n_modes)))
-    packed[:, :basis.n_modes] = rows
+    scale = state_scale(basis)
+    scale_a, scale_w = scale[STATE_A], scale[STATE_W]
+    packed = aligned_zeros((N_COEFFICIENT_ROWS, padded_modes(basis.n_modes)))
+    rows = packed[:, :basis.n_modes]
+    rows[ROW_FREE_AA] = c_aa
+    rows[ROW_FREE_WA] = c_av * c_va
+    rows[ROW_FREE_WW] = c_vv
+    rows[ROW_PUSH_A_BOW] = scale_a * coeffs.push_bow[0]
+    rows[ROW_PUSH_W_BOW] = scale_w * coeffs.push_bow[1]
+    rows[ROW_PUSH_A_FINGER] = scale_a * coeffs.push_finger[0]
+    rows[ROW_PUSH_W_FINGER] = scale_w * coeffs.push_finger[1]
+    rows[ROW_READ_BOW_W] = coeffs.shape_bow / scale_w
+    rows[ROW_READ_FINGER_A] = coeffs.shape_finger / scale_a
+    rows[ROW_READ_FINGER_W] = coeffs.shape_finger / scale_w
     return packed

@@ -11,52 +11,82 @@ import math
 import numpy as np
 from numba import njit
 
-#: Contact states written per sample.
-CONTACT_NONE, CONTACT_STICK, CONTACT_SLIP = 0, 1, 2
-#: Contact modes read per sample.
-MODE_LIFTED, MODE_BOW, MODE_GRIP = 0, 1, 2
+#: Stick-slip states written per sample (``out_stick_slip``).
+OFF_STRING, STICKING, SLIPPING = 0, 1, 2
+#: Contacts read per sample (``contact``): bow lifted, bowing with friction, grip (a
+#: plucking finger pulls the string along, no slipping).
+CONTACT_LIFTED, CONTACT_BOW, CONTACT_GRIP = 0, 1, 2
 
 # Reassociation lets LLVM vectorise the modal sums; results stay deterministic for a given
 # build and machine.
 _FAST = {"reassoc", "contract", "nsz", "arcp"}
 
-
-# Rows of the packed per-mode coefficient array (:func:`synth.modal.pack_coefficients`), in
-# the state coordinates of :func:`synth.modal.state_scale`: free step c_aa, c_WA, c_vv; bow
-# push into A, W; finger push into A, W; bow-point velocity per W; finger displacement per
-# A and velocity per W. The bridge force is the plain sum of A.
+#: Rows of the packed per-mode coefficient array (:func:`synth.modal.pack_coefficients`), in
+#: the state coordinates of :func:`synth.modal.state_scale`: free step c_aa, c_WA, c_vv; bow
+#: push into A, W; finger push into A, W; bow-point velocity per W; finger displacement per
+#: A and velocity per W. The bridge force is the plain sum of A.
+ROW_FREE_AA, ROW_FREE_WA, ROW_FREE_WW = 0, 1, 2
+ROW_PUSH_A_BOW, ROW_PUSH_W_BOW, ROW_PUSH_A_FINGER, ROW_PUSH_W_FINGER = 3, 4, 5, 6
+ROW_READ_BOW_W, ROW_READ_FINGER_A, ROW_READ_FINGER_W = 7, 8, 9
+N_COEFFICIENT_ROWS = 10
+#: Entries of the contact gains (:func:`synth.modal.contact_coefficients`): end-of-step
+#: bow-point velocity per bow and per finger force (H_bb, H_bf), finger displacement (G) and
+#: velocity (H) per finger and per bow force, bridge force per bow and per finger force.
+(GAIN_H_BB, GAIN_H_BF, GAIN_G_FF, GAIN_G_FB, GAIN_H_FF, GAIN_H_FB, GAIN_BRIDGE_BOW,
+ GAIN_BRIDGE_FINGER) = range(8)
+N_GAINS = 8
+#: Entries of the friction parameters (:func:`pack_friction`).
+FRICTION_MU_S, FRICTION_MU_D, FRICTION_V0, FRICTION_NOISE_DEPTH = 0, 1, 2, 3
+#: Entries of the finger spring (:func:`pack_finger_spring`).
+SPRING_STIFFNESS, SPRING_DAMPING = 0, 1
+#: Rows of the modal state, (A, W) per mode (:func:`synth.modal.state_scale`).
+STATE_A, STATE_W = 0, 1
+#: Entries of the previous sample's contact forces.
+FORCE_BOW, FORCE_FINGER = 0, 1
 
 
 @njit(cache=True, fastmath=_FAST, error_model="numpy")
 def advance_string(modal_state, last_forces, coefficients, gains, finger_spring, friction,
-                   fingered, bow_velocity, bow_force, contact_mode, noise, noise_used,
-                   out_bridge, out_slip_velocity, out_contact):  # pragma: no cover - numba
+                   fingered, bow_velocity, bow_force, contact, noise, noise_used,
+                   out_bridge, out_slip_velocity, out_stick_slip):  # pragma: no cover - numba
     """Advance one string by ``bow_velocity.size`` samples; see :mod:`synth.modal`.
 
     ``modal_state`` [shape=(2, n_modes)] holds each mode's (A, W) = (B a, B c_av v), N
     (:func:`synth.modal.state_scale`), and ``last_forces`` the bow and finger forces (N)
     of the previous sample; both are updated in place. The states exclude ``last_forces``,
     which the next free step folds in through the push rows of ``coefficients``
-    [shape=(10, n_modes)].
-    ``gains`` = (H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge per bow force, bridge per finger
-    force), ``friction`` = (mu_s, mu_d, v0 m/s, noise depth), ``finger_spring`` = (K N/m,
-    R N s/m). Writes bridge force (N), slip velocity (m/s) and contact state per sample.
+    [shape=(N_COEFFICIENT_ROWS, n_modes)] (rows ``ROW_*``).
+    ``gains`` (entries ``GAIN_*``) = (H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge per bow
+    force, bridge per finger force), ``friction`` (``FRICTION_*``) = (mu_s, mu_d, v0 m/s,
+    noise depth), ``finger_spring`` (``SPRING_*``) = (K N/m, R N s/m). ``contact`` holds a
+    ``CONTACT_*`` per sample. Writes bridge force (N), slip velocity (m/s) and stick-slip
+    state (``OFF_STRING``, ``STICKING``, ``SLIPPING``) per sample.
     ``noise`` holds uniform draws of friction noise, consumed one per slipping sample in
     sample order from ``noise_used[0]`` on (updated in place), so a seed fixes the sound.
     The kernel stops before a sample when no draw is left and returns how many samples it
     advanced; the caller refills ``noise`` and calls again with the rest.
     """
-    modal_a = modal_state[0]
-    modal_w = modal_state[1]
+    modal_a = modal_state[STATE_A]
+    modal_w = modal_state[STATE_W]
     n_modes = modal_a.size
-    c_aa, c_wa, c_ww = coefficients[0], coefficients[1], coefficients[2]
-    pa_b, pw_b, pa_f, pw_f = coefficients[3], coefficients[4], coefficients[5], coefficients[6]
-    read_b, read_fa, read_fw = coefficients[7], coefficients[8], coefficients[9]
-    h_bb, h_bf, g_ff, g_fb, h_ff, h_fb, br_b, br_f = (
-        gains[0], gains[1], gains[2], gains[3], gains[4], gains[5], gains[6], gains[7])
-    stiffness, damping = finger_spring[0], finger_spring[1]
-    mu_s, mu_d, v0_nominal, noise_depth = friction[0], friction[1], friction[2], friction[3]
-    f_bow, f_finger = last_forces[0], last_forces[1]
+    c_aa = coefficients[ROW_FREE_AA]
+    c_wa = coefficients[ROW_FREE_WA]
+    c_ww = coefficients[ROW_FREE_WW]
+    pa_b = coefficients[ROW_PUSH_A_BOW]
+    pw_b = coefficients[ROW_PUSH_W_BOW]
+    pa_f = coefficients[ROW_PUSH_A_FINGER]
+    pw_f = coefficients[ROW_PUSH_W_FINGER]
+    read_b = coefficients[ROW_READ_BOW_W]
+    read_fa = coefficients[ROW_READ_FINGER_A]
+    read_fw = coefficients[ROW_READ_FINGER_W]
+    h_bb, h_bf = gains[GAIN_H_BB], gains[GAIN_H_BF]
+    g_ff, g_fb = gains[GAIN_G_FF], gains[GAIN_G_FB]
+    h_ff, h_fb = gains[GAIN_H_FF], gains[GAIN_H_FB]
+    br_b, br_f = gains[GAIN_BRIDGE_BOW], gains[GAIN_BRIDGE_FINGER]
+    stiffness, damping = finger_spring[SPRING_STIFFNESS], finger_spring[SPRING_DAMPING]
+    mu_s, mu_d = friction[FRICTION_MU_S], friction[FRICTION_MU_D]
+    v0_nominal, noise_depth = friction[FRICTION_V0], friction[FRICTION_NOISE_DEPTH]
+    f_bow, f_finger = last_forces[FORCE_BOW], last_forces[FORCE_FINGER]
     # The finger force is linear in the bow force, f_finger = p + q f_bow, with q constant;
     # so is the bow-point admittance (end-of-step velocity per bow force, s/kg).
     finger_gain = 1.0 / (1.0 + stiffness * g_ff + damping * h_ff)
@@ -99,18 +129,18 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
                 v_bow_point += read_b[n] * w_new
                 bridge += a_new
         v_free = v_bow_point + h_bf * p
-        mode = contact_mode[t]
+        contact_now = contact[t]
         slip = 0.0
-        if mode == MODE_LIFTED:
+        if contact_now == CONTACT_LIFTED:
             f_bow = 0.0
-            out_contact[t] = CONTACT_NONE
+            out_stick_slip[t] = OFF_STRING
         else:
             dv = bow_velocity[t] - v_free
             f_stick = dv * inverse_admittance
             normal = bow_force[t]
-            if mode == MODE_GRIP or abs(f_stick) <= mu_s * normal:
+            if contact_now == CONTACT_GRIP or abs(f_stick) <= mu_s * normal:
                 f_bow = f_stick
-                out_contact[t] = CONTACT_STICK
+                out_stick_slip[t] = STICKING
             else:
                 # Hyperbolic friction, solved in closed form for the slip speed.
                 v0 = v0_nominal * (1.0 - noise_depth * noise[next_noise])
@@ -121,16 +151,41 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
                 slip = 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
                 mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
                 f_bow = math.copysign(normal * mu, dv)
-                out_contact[t] = CONTACT_SLIP
+                out_stick_slip[t] = SLIPPING
         f_finger = p + q * f_bow
         out_bridge[t] = bridge + br_b * f_bow + br_f * f_finger
         out_slip_velocity[t] = slip
-    last_forces[0] = f_bow
-    last_forces[1] = f_finger
+    last_forces[FORCE_BOW] = f_bow
+    last_forces[FORCE_FINGER] = f_finger
     noise_used[0] = next_noise
     return done
 
 
 def empty_outputs(n_samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Allocate (bridge force, slip velocity, contact state) arrays for ``n_samples``."""
+    """Allocate (bridge force, slip velocity, stick-slip state) arrays for ``n_samples``."""
     return (np.empty(n_samples), np.empty(n_samples), np.empty(n_samples, dtype=np.int8))
+
+
+def pack_friction(mu_s: float, mu_d: float, v0: float, noise_depth: float) -> np.ndarray:
+    """The kernel's ``friction`` array (entries ``FRICTION_*``).
+
+    Parameters
+    ----------
+    mu_s, mu_d : float
+        Static and dynamic friction coefficients.
+    v0 : float, m/s
+        Velocity scale of the hyperbolic friction curve.
+    noise_depth : float
+        Depth of the multiplicative noise on v0.
+    """
+    out = np.empty(4)
+    out[FRICTION_MU_S], out[FRICTION_MU_D] = mu_s, mu_d
+    out[FRICTION_V0], out[FRICTION_NOISE_DEPTH] = v0, noise_depth
+    return out
+
+
+def pack_finger_spring(stiffness: float, damping: float) -> np.ndarray:
+    """The kernel's ``finger_spring`` array: stiffness (N/m) and damping (N s/m)."""
+    out = np.empty(2)
+    out[SPRING_STIFFNESS], out[SPRING_DAMPING] = stiffness, damping
+    return out

@@ -70,16 +70,16 @@ class StringTrack:
         os_ = inst.oversample
         t_sub = (start + np.arange(0, n_out, SUB_BLOCK)) / inst.sample_rate
         velocity, force = np.empty(n_out * os_), np.empty(n_out * os_)
-        mode = np.empty(n_out * os_, np.int8)
+        contact = np.empty(n_out * os_, np.int8)
         sample_bowing(self.time, self.bow_velocity, self.bow_force, start * os_,
-                      float(inst.internal_rate), velocity, force, mode)
+                      float(inst.internal_rate), velocity, force, contact)
         lo = start / inst.sample_rate
         hi = (start + n_out) / inst.sample_rate
         now = (self.pluck_times >= lo) & (self.pluck_times < hi)
         offsets = tuple(int(round((p - lo) * inst.internal_rate)) for p in self.pluck_times[now])
         pulls = tuple(PLUCK_DISPLACEMENT * (f / PLUCK_REFERENCE_FORCE if f > 0 else 1.0)
                       for f in self.pluck_forces[now])
-        return StringInput(velocity, force, mode, self.sample(self.beta, t_sub),
+        return StringInput(velocity, force, contact, self.sample(self.beta, t_sub),
                            self.sample(self.finger_ratio, t_sub), offsets, pulls)
 
 

@@ -15,7 +15,12 @@ from synth.modal import (
     padded_modes,
     state_scale,
 )
-from synth.modal_kernel import advance_string
+from synth.modal_kernel import (
+    STATE_A,
+    advance_string,
+    pack_finger_spring,
+    pack_friction,
+)
 from synth.strings import StringConstants
 
 #: Resolution of beta and finger_ratio at which contact coefficients are recomputed.
@@ -38,13 +43,14 @@ class StringOutput:
     bridge_force : np.ndarray [shape=(n,)], N
     slip_velocity : np.ndarray [shape=(n,)], m/s
         |v_bow - v_string| while slipping, else 0.
-    contact : np.ndarray [shape=(n,)], int8
-        0 = bow off the string, 1 = sticking, 2 = slipping.
+    stick_slip : np.ndarray [shape=(n,)], int8
+        :data:`synth.modal_kernel.OFF_STRING` (0, bow off the string), ``STICKING`` (1),
+        ``SLIPPING`` (2).
     """
 
     bridge_force: np.ndarray
     slip_velocity: np.ndarray
-    contact: np.ndarray
+    stick_slip: np.ndarray
 
 
 class StringVoice:
@@ -74,10 +80,11 @@ class StringVoice:
         self.state = aligned_zeros((2, padded_modes(self.basis.n_modes)))
         # The kernel keeps A = bridge gain x displacement; silence is judged on displacement.
         self._silent_level = np.full(self.state.shape[1], np.inf)
-        self._silent_level[:self.basis.n_modes] = SILENT_AMPLITUDE * state_scale(self.basis)[0]
+        self._silent_level[:self.basis.n_modes] = (SILENT_AMPLITUDE
+                                                   * state_scale(self.basis)[STATE_A])
         self.last_forces = np.zeros(2)
-        self.friction = np.array([string.mu_s, string.mu_d, string.v0, friction_noise])
-        self.finger_spring = np.array([string.finger_stiffness, string.finger_damping])
+        self.friction = pack_friction(string.mu_s, string.mu_d, string.v0, friction_noise)
+        self.finger_spring = pack_finger_spring(string.finger_stiffness, string.finger_damping)
         self._cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, bool]] = {}
         self._noise = np.zeros(0)
         self._noise_used = np.zeros(1, np.int64)
@@ -96,9 +103,9 @@ class StringVoice:
         if hit is None:
             if len(self._cache) >= _CACHE_SIZE:
                 self._cache.clear()
-            contact = contact_coefficients(self.basis, key[0] * BETA_RESOLUTION,
-                                           key[1] * FINGER_RESOLUTION)
-            hit = (pack_coefficients(self.basis, contact), contact.gains, contact.fingered)
+            coeffs = contact_coefficients(self.basis, key[0] * BETA_RESOLUTION,
+                                          key[1] * FINGER_RESOLUTION)
+            hit = (pack_coefficients(self.basis, coeffs), coeffs.gains, coeffs.fingered)
             self._cache[key] = hit
         return hit
 
@@ -112,7 +119,7 @@ class StringVoice:
         self._noise = self.rng.random(NOISE_BLOCK)
         self._noise_used[0] = 0
 
-    def advance(self, bow_velocity: np.ndarray, bow_force: np.ndarray, contact_mode: np.ndarray,
+    def advance(self, bow_velocity: np.ndarray, bow_force: np.ndarray, contact: np.ndarray,
                 beta: float, finger_ratio: float, out: StringOutput) -> None:
         """Advance by ``bow_velocity.size`` samples at fixed beta and finger, writing ``out``.
 
@@ -120,17 +127,18 @@ class StringVoice:
         ----------
         bow_velocity : np.ndarray [shape=(n,)], m/s
         bow_force : np.ndarray [shape=(n,)], N
-        contact_mode : np.ndarray [shape=(n,)], int8
-            0 = bow lifted, 1 = bowing with friction, 2 = grip (pluck pull, no slipping).
+        contact : np.ndarray [shape=(n,)], int8
+            :data:`synth.modal_kernel.CONTACT_LIFTED` (0), ``CONTACT_BOW`` (1, bowing with
+            friction), ``CONTACT_GRIP`` (2, pluck pull, no slipping).
         beta : float
         finger_ratio : float
         out : StringOutput
             Views of length n to write into.
         """
-        if not self.excited and not contact_mode.any():
+        if not self.excited and not contact.any():
             out.bridge_force[:] = 0.0
             out.slip_velocity[:] = 0.0
-            out.contact[:] = 0
+            out.stick_slip[:] = 0
             return
         self.excited = True
         packed, gains, fingered = self.coefficients(beta, finger_ratio)
@@ -139,11 +147,11 @@ class StringVoice:
         while True:
             done += advance_string(self.state, self.last_forces, packed, gains,
                                    self.finger_spring, self.friction, fingered,
-                                   bow_velocity[done:], bow_force[done:], contact_mode[done:],
+                                   bow_velocity[done:], bow_force[done:], contact[done:],
                                    self._noise, self._noise_used, out.bridge_force[done:],
-                                   out.slip_velocity[done:], out.contact[done:])
+                                   out.slip_velocity[done:], out.stick_slip[done:])
             if done == n:
                 break
             self._refill_noise()
-        if not contact_mode[-1] and np.all(np.abs(self.state[0]) < self._silent_level):
+        if not contact[-1] and np.all(np.abs(self.state[STATE_A]) < self._silent_level):
             self.reset()  # rung out: stop simulating until touched again

@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from synth.modal_kernel import CONTACT_GRIP, CONTACT_LIFTED, OFF_STRING, SLIPPING, STICKING
+
 
 def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocity, bow_force,
-                 contact_mode, rng):
-    """Return (bridge force, slip velocity, contact) per sample, like the kernel.
+                 contact, rng):
+    """Return (bridge force, slip velocity, stick-slip state) per sample, like the kernel.
 
     ``rng`` gives one uniform draw of friction noise per slipping sample, in order.
     """
@@ -53,13 +55,13 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
         v_unforced = bow_point_velocity(0.0)
         admittance = bow_point_velocity(1.0) - v_unforced
         slip = 0.0
-        if contact_mode[t] == 0:
-            f_bow, state = 0.0, 0
+        if contact[t] == CONTACT_LIFTED:
+            f_bow, state = 0.0, OFF_STRING
         else:
             dv = bow_velocity[t] - v_unforced
             f_stick = dv / admittance
-            if contact_mode[t] == 2 or abs(f_stick) <= mu_s * bow_force[t]:
-                f_bow, state = f_stick, 1
+            if contact[t] == CONTACT_GRIP or abs(f_stick) <= mu_s * bow_force[t]:
+                f_bow, state = f_stick, STICKING
             else:
                 v0 = v0_nominal * (1.0 - depth * rng.random())
                 fb = bow_force[t]
@@ -74,7 +76,7 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
                         lo = u
                 slip = 0.5 * (lo + hi)
                 mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
-                f_bow, state = np.sign(dv) * fb * mu, 2
+                f_bow, state = np.sign(dv) * fb * mu, SLIPPING
         a, v = end_state(f_bow, finger_force(f_bow))
         out[0][t] = basis.bridge_gain @ a
         out[1][t] = slip

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from synth.control_kernel import sample_bowing
-from synth.modal_kernel import MODE_BOW, MODE_LIFTED
+from synth.modal_kernel import CONTACT_BOW, CONTACT_LIFTED
 
 
 @settings(max_examples=200, deadline=None)
@@ -22,8 +22,8 @@ def test_sample_bowing_equals_numpy_interp(seed, n_frames, first_sample, n, step
     force = np.where(rng.random(n_frames) < 0.3, 0.0, rng.uniform(0.0, 2.0, n_frames))
     t = (first_sample + np.arange(n)) / rate
     expected_force = np.interp(t, frame_time, force)
-    expected_mode = np.where((t >= frame_time[0]) & (t <= frame_time[-1])
-                             & (expected_force > 0.0), MODE_BOW, MODE_LIFTED)
+    expected_contact = np.where((t >= frame_time[0]) & (t <= frame_time[-1])
+                             & (expected_force > 0.0), CONTACT_BOW, CONTACT_LIFTED)
     out_v, out_f, out_m = np.empty(n), np.empty(n), np.empty(n, np.int8)
     sample_bowing(frame_time, velocity, force, first_sample, rate, out_v, out_f, out_m)
     # A sample inside a nanosecond step may round either way; everywhere else: equal.
@@ -33,7 +33,7 @@ def test_sample_bowing_equals_numpy_interp(seed, n_frames, first_sample, n, step
     ok = ~inside_step
     np.testing.assert_allclose(out_v[ok], np.interp(t, frame_time, velocity)[ok], atol=1e-9)
     np.testing.assert_allclose(out_f[ok], expected_force[ok], atol=1e-9)
-    np.testing.assert_array_equal(out_m[ok], expected_mode[ok])
+    np.testing.assert_array_equal(out_m[ok], expected_contact[ok])
 
 
 @settings(max_examples=100, deadline=None)
@@ -49,5 +49,5 @@ def test_ramp_bowing_reaches_the_end_values(v, f, n, lifted):
     np.testing.assert_allclose(out_v, v[0] + (v[1] - v[0]) * w, atol=1e-12)
     np.testing.assert_allclose(out_f, f[0] + (f[1] - f[0]) * w, atol=1e-12)
     assert out_f[-1] == pytest.approx(f[1])
-    expected = np.where(~lifted & (out_f > 0.0), MODE_BOW, MODE_LIFTED)
+    expected = np.where(~lifted & (out_f > 0.0), CONTACT_BOW, CONTACT_LIFTED)
     np.testing.assert_array_equal(out_m, expected)

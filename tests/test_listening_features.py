@@ -66,24 +66,6 @@ def test_yin_finds_the_pitch_and_clips_the_difference(f0):
     assert np.all(np.abs(far) <= 3.0)
 
 
-@pytest.mark.parametrize("n", [4, 64, 1024, 4096])
-def test_numba_real_fft_matches_numpy(n):
-    from synth.listening.numba_fft import irfft, rfft, rfft_tables
-
-    rng = np.random.default_rng(n)
-    x = rng.normal(size=n)
-    rev, tables = rfft_tables(n)
-    re, im = np.zeros(n // 2 + 1), np.zeros(n // 2 + 1)
-    zr, zi = np.zeros(n // 2), np.zeros(n // 2)
-    for length in (n, n // 2):
-        rfft(x, length, re, im, zr, zi, rev, tables)
-        np.testing.assert_allclose(re + 1j * im, np.fft.rfft(x[:length], n), atol=1e-12 * n)
-    spec = np.fft.rfft(x)
-    back = np.zeros(n)
-    irfft(spec.real.copy(), spec.imag.copy(), back, zr, zi, rev, tables)
-    np.testing.assert_allclose(back, x, atol=1e-12 * n)
-
-
 def test_streaming_with_a_long_yin_window_equals_batch(signal):
     f = batch_features(signal, 110.0, sample_rate=SR, yin_window=2048)
     st = StreamingFeatures(SR, yin_window=2048)

@@ -3,7 +3,7 @@ import pandas as pd
 import pytest
 
 from data_schemas import SchemaError
-from data_schemas.labels import merge_labels, read_labels, write_labels
+from data_schemas.labels import LABELS_VERSION, merge_labels, read_labels, write_labels
 from synth.listening.clips import ClipSpec, auto_label, render_clip
 from synth.listening.teacher import RegimeStatistics, judge
 
@@ -28,7 +28,8 @@ def test_judge_mapping_of_regimes():
 
 def _labels(**over):
     row = dict(clip_id="c1", audio_path=None, instrument="violin", string=1, dynamic="mf",
-               finger=0.0, force=0.5, velocity=0.33, beta=0.1, label=3, labeller="auto",
+               finger_semitones=0.0, bow_force=0.5, bow_velocity=0.33, beta=0.1, label=3,
+               labeller="auto",
                time=pd.Timestamp("2024-01-01", tz="UTC"))
     row.update(over)
     return pd.DataFrame([row])
@@ -51,3 +52,54 @@ def test_labels_reject_bad_rows(tmp_path):
         write_labels(_labels(label=6), tmp_path / "bad.parquet")
     with pytest.raises(SchemaError, match="dynamic"):
         write_labels(_labels(dynamic="fff"), tmp_path / "bad.parquet")
+
+
+def _v1_table(**metadata):
+    """Two rows of a labels table as Arco wrote version 1.0 (finger, force, velocity)."""
+    import pyarrow as pa
+
+    fields = [("clip_id", pa.string()), ("audio_path", pa.string()), ("instrument", pa.string()),
+              ("string", pa.int8()), ("dynamic", pa.string()), ("finger", pa.float64()),
+              ("force", pa.float64()), ("velocity", pa.float64()), ("beta", pa.float64()),
+              ("label", pa.int8()), ("labeller", pa.string()),
+              ("time", pa.timestamp("s", tz="UTC"))]
+    columns = [["a", "b"], [None, "clips/b.wav"], ["violin", "viola"], [1, 3], ["mf", "p"],
+               [0.0, 7.0], [0.25, 1.5], [0.33, -0.2], [0.1, 0.12], [3, 4], ["auto", "ann"],
+               [pd.Timestamp("2024-01-01", tz="UTC")] * 2]
+    schema = pa.schema(fields, metadata=metadata or None)
+    return pa.table([pa.array(c, t) for c, (_, t) in zip(columns, fields, strict=True)],
+                    schema=schema)
+
+
+@pytest.mark.parametrize("metadata", [
+    {"arco_table": "labels", "arco_schema_version": "1.0"},  # as version 1.0 wrote it
+    {},  # a file without Arco's metadata, the old column names
+])
+def test_version_1_labels_are_read_with_the_new_column_names(tmp_path, metadata):
+    import pyarrow.parquet as pq
+
+    assert LABELS_VERSION == "2.0"
+    path = tmp_path / "v1.parquet"
+    pq.write_table(_v1_table(**metadata), path)
+    back = read_labels(path)
+    assert list(back.columns[5:8]) == ["finger_semitones", "bow_force", "bow_velocity"]
+    assert back["finger_semitones"].tolist() == [0.0, 7.0]
+    assert back["bow_force"].tolist() == [0.25, 1.5]
+    assert back["bow_velocity"].tolist() == [0.33, -0.2]
+    assert back["label"].tolist() == [3, 4] and back["clip_id"].tolist() == ["a", "b"]
+    # Written back, it is a version 2.0 file.
+    again = write_labels(back, tmp_path / "v2.parquet")
+    assert pq.read_schema(again).metadata[b"arco_schema_version"] == b"2.0"
+    pd.testing.assert_frame_equal(read_labels(again), back)
+
+
+def test_version_1_labels_csv_is_migrated_and_other_versions_are_refused(tmp_path):
+    import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
+
+    pacsv.write_csv(_v1_table(), tmp_path / "v1.csv")
+    assert read_labels(tmp_path / "v1.csv")["bow_force"].tolist() == [0.25, 1.5]
+    pq.write_table(_v1_table(arco_table="labels", arco_schema_version="3.0"),
+                   tmp_path / "v3.parquet")
+    with pytest.raises(SchemaError, match="v3.parquet.*version 3.0"):
+        read_labels(tmp_path / "v3.parquet")

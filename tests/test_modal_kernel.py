@@ -5,22 +5,22 @@ import pytest
 from naive_modal import naive_string
 
 from synth.modal import contact_coefficients, mode_basis, pack_coefficients
-from synth.modal_kernel import advance_string, empty_outputs
+from synth.modal_kernel import SLIPPING, advance_string, empty_outputs
 from synth.strings import load_instrument
 
 N = 2000
 
 
-def run_kernel(basis, string, beta, finger_ratio, velocity, force, mode, rng):
-    contact = contact_coefficients(basis, beta, finger_ratio)
-    packed = pack_coefficients(basis, contact)
+def run_kernel(basis, string, beta, finger_ratio, velocity, force, contact, rng):
+    coeffs = contact_coefficients(basis, beta, finger_ratio)
+    packed = pack_coefficients(basis, coeffs)
     state = np.zeros((2, basis.n_modes))
     forces = np.zeros(2)
     out = empty_outputs(velocity.size)
     friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
     spring = np.array([string.finger_stiffness, string.finger_damping])
-    advance_string(state, forces, packed, contact.gains, spring, friction, contact.fingered,
-                   velocity, force, mode, rng.random(velocity.size), np.zeros(1, np.int64),
+    advance_string(state, forces, packed, coeffs.gains, spring, friction, coeffs.fingered,
+                   velocity, force, contact, rng.random(velocity.size), np.zeros(1, np.int64),
                    *out)
     return out
 
@@ -31,14 +31,14 @@ def test_kernel_matches_numpy_twin(string_index, finger_ratio):
     basis = mode_basis(string, 88200.0, max_frequency=20000.0)
     velocity = np.linspace(0.0, 0.4, N)
     force = np.full(N, string.reference_force)
-    mode = np.ones(N, np.int8)
-    mode[:50] = 0
-    kernel = run_kernel(basis, string, 0.11, finger_ratio, velocity, force, mode,
+    contact = np.ones(N, np.int8)
+    contact[:50] = 0
+    kernel = run_kernel(basis, string, 0.11, finger_ratio, velocity, force, contact,
                         np.random.default_rng(3))
     twin = naive_string(basis, 0.11, finger_ratio,
                         (string.mu_s, string.mu_d, string.v0, 0.02),
                         (string.finger_stiffness, string.finger_damping),
-                        velocity, force, mode, np.random.default_rng(3))
+                        velocity, force, contact, np.random.default_rng(3))
     assert set(np.unique(kernel[2])) >= {1, 2}, "the run must both stick and slip"
     np.testing.assert_array_equal(kernel[2], twin[2])
     scale = np.abs(twin[0]).max()
@@ -61,21 +61,21 @@ def test_kernel_split_into_odd_runs_equals_one_run(finger_ratio):
     """Any split of a run into calls (odd sizes, a lift inside) gives the same output."""
     string = load_instrument("violin").strings[2]
     basis = mode_basis(string, 88200.0, max_frequency=20000.0)
-    contact = contact_coefficients(basis, 0.09, finger_ratio)
-    packed = pack_coefficients(basis, contact)
+    coeffs = contact_coefficients(basis, 0.09, finger_ratio)
+    packed = pack_coefficients(basis, coeffs)
     friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
     spring = np.array([string.finger_stiffness, string.finger_damping])
     velocity = np.linspace(0.05, 0.3, N)
     force = np.full(N, string.reference_force)
-    mode = np.ones(N, np.int8)
-    mode[1500:1600] = 0  # a lift inside the run
+    contact = np.ones(N, np.int8)
+    contact[1500:1600] = 0  # a lift inside the run
 
     def run(bounds):
         state, forces, out = np.zeros((2, basis.n_modes)), np.zeros(2), empty_outputs(N)
         noise, used = np.random.default_rng(5).random(N), np.zeros(1, np.int64)
         for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-            advance_string(state, forces, packed, contact.gains, spring, friction,
-                           contact.fingered, velocity[lo:hi], force[lo:hi], mode[lo:hi],
+            advance_string(state, forces, packed, coeffs.gains, spring, friction,
+                           coeffs.fingered, velocity[lo:hi], force[lo:hi], contact[lo:hi],
                            noise, used, out[0][lo:hi], out[1][lo:hi], out[2][lo:hi])
         return out
 
@@ -93,16 +93,16 @@ def test_voice_output_does_not_depend_on_how_a_run_is_split():
     string = load_instrument("violin").strings[1]
     n = 150_000  # longer than one block of noise draws
     velocity, force = np.full(n, 0.3), np.full(n, string.reference_force)
-    mode = np.ones(n, np.int8)
+    contact = np.ones(n, np.int8)
 
     def run(bounds):
         voice = StringVoice(string, 88200.0, np.random.default_rng(9),
                             max_mode_frequency=20000.0)
         out = StringOutput(np.empty(n), np.empty(n), np.empty(n, np.int8))
         for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-            voice.advance(velocity[lo:hi], force[lo:hi], mode[lo:hi], 0.1, 0.0,
+            voice.advance(velocity[lo:hi], force[lo:hi], contact[lo:hi], 0.1, 0.0,
                           StringOutput(out.bridge_force[lo:hi], out.slip_velocity[lo:hi],
-                                       out.contact[lo:hi]))
+                                       out.stick_slip[lo:hi]))
         return out.bridge_force
 
     np.testing.assert_array_equal(run([0, n]), run([0, 513, 70_001, 70_002, n]))
@@ -112,12 +112,12 @@ def test_kernel_stops_when_its_friction_noise_is_used_up_and_resumes_exactly():
     """One draw per slipping sample; with none left the kernel returns before the sample."""
     string = load_instrument("violin").strings[1]
     basis = mode_basis(string, 88200.0, max_frequency=20000.0)
-    contact = contact_coefficients(basis, 0.1, 0.0)
-    packed = pack_coefficients(basis, contact)
+    coeffs = contact_coefficients(basis, 0.1, 0.0)
+    packed = pack_coefficients(basis, coeffs)
     friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
     spring = np.array([string.finger_stiffness, string.finger_damping])
     velocity, force = np.full(N, 0.3), np.full(N, string.reference_force)
-    mode = np.ones(N, np.int8)
+    contact = np.ones(N, np.int8)
     draws = np.random.default_rng(2).random(N)
 
     def run(noise_blocks):
@@ -125,8 +125,8 @@ def test_kernel_stops_when_its_friction_noise_is_used_up_and_resumes_exactly():
         done, calls = 0, 0
         for noise in noise_blocks:
             used = np.zeros(1, np.int64)
-            done += advance_string(state, forces, packed, contact.gains, spring, friction,
-                                   False, velocity[done:], force[done:], mode[done:], noise,
+            done += advance_string(state, forces, packed, coeffs.gains, spring, friction,
+                                   False, velocity[done:], force[done:], contact[done:], noise,
                                    used, *(o[done:] for o in out))
             calls += 1
             assert used[0] == noise.size or done == N
@@ -135,7 +135,7 @@ def test_kernel_stops_when_its_friction_noise_is_used_up_and_resumes_exactly():
         return done, calls, out
 
     done, _, whole = run([draws])
-    slips = int(np.count_nonzero(whole[2] == 2))
+    slips = int(np.count_nonzero(whole[2] == SLIPPING))
     assert done == N and 0 < slips < N
     done, calls, pieces = run([draws[i:i + 7] for i in range(0, N, 7)])
     assert done == N and calls == -(-slips // 7) + (slips % 7 == 0)

@@ -21,8 +21,9 @@ import pandas as pd
 
 from data_schemas.errors import ParameterError
 from data_schemas.labels import AUTO_LABELLER, merge_labels, read_labels, write_labels
+from synth.listening.basic_training import JudgedClip
 from synth.listening.classifier import DYNAMICS, pair_key, save_pair
-from synth.listening.training import DEFAULT_LANES, JudgedClip, TrainingSettings
+from synth.listening.training_settings import DEFAULT_LANES, TrainingSettings
 
 TEACHERS = ("auto", "human", "both")
 
@@ -30,6 +31,11 @@ TEACHERS = ("auto", "human", "both")
 def clip_id(key: str, semitones: float, force: float) -> str:
     """Stable id of an automatic training clip."""
     return f"{key}-s{semitones:g}-F{force:.5g}"
+
+
+def pair_seed(seed: int, string: int, dynamic: str) -> int:
+    """Seed of one pair's training from the run's ``seed`` (pairs differ, runs repeat)."""
+    return seed * 1009 + string * 17 + DYNAMICS.index(dynamic)
 
 
 def is_complete(out_dir: str | os.PathLike, key: str) -> bool:
@@ -51,9 +57,9 @@ def _labels_frame(clips: list[JudgedClip], key: str, dynamic: str) -> pd.DataFra
         "instrument": [j.clip.spec.instrument for j in clips],
         "string": [j.clip.spec.string for j in clips],
         "dynamic": dynamic,
-        "finger": [j.clip.spec.semitones for j in clips],
-        "force": [j.force for j in clips],
-        "velocity": [j.clip.spec.bow_velocity for j in clips],
+        "finger_semitones": [j.clip.spec.semitones for j in clips],
+        "bow_force": [j.force for j in clips],
+        "bow_velocity": [j.clip.spec.bow_velocity for j in clips],
         "beta": [j.clip.spec.beta for j in clips],
         "label": [j.label for j in clips],
         "labeller": AUTO_LABELLER,
@@ -69,8 +75,8 @@ def _human_clips(human: pd.DataFrame, base: Path) -> list[JudgedClip]:
 
     out = []
     for row in human.itertuples(index=False):
-        spec = ClipSpec(row.instrument, int(row.string), float(row.finger), float(row.force),
-                        float(row.velocity), float(row.beta))
+        spec = ClipSpec(row.instrument, int(row.string), float(row.finger_semitones),
+                        float(row.bow_force), float(row.bow_velocity), float(row.beta))
         if isinstance(row.audio_path, str) and row.audio_path:
             path = Path(row.audio_path)
             path = path if path.is_absolute() else base / path
@@ -110,12 +116,13 @@ def train_one(instrument: str, string: int, dynamic: str, out_dir: str, *,
     settings : TrainingSettings, optional
     seed : int
     """
-    from synth.listening.training import basic_training, train_pair
+    from synth.listening.basic_training import basic_training
+    from synth.listening.training import train_pair
 
     start = time.perf_counter()
     key = pair_key(instrument, string, dynamic)
     settings = settings or TrainingSettings()
-    seed = seed * 1009 + string * 17 + DYNAMICS.index(dynamic)
+    seed = pair_seed(seed, string, dynamic)
     human = None
     if labels is not None and teacher != "auto":
         human = labels[(labels["instrument"] == instrument) & (labels["string"] == string)
@@ -148,7 +155,7 @@ def train_one(instrument: str, string: int, dynamic: str, out_dir: str, *,
     seconds = time.perf_counter() - start
     model.metadata.update(teacher=teacher, train_seconds=seconds,
                           settings={k: v for k, v in asdict(settings).items()
-                                    if k != "controller"})
+                                    if k not in ("controller", "thresholds")})
     save_pair(model, out)
     from synth.listening.classifier import update_metadata
 
@@ -202,23 +209,8 @@ def train_instrument(instrument: str, out_dir: str | os.PathLike, *, teacher: st
     """
     from tqdm import tqdm
 
-    from synth.strings import load_instrument
-
-    if teacher not in TEACHERS:
-        raise ParameterError(f"--teacher {teacher!r} must be one of {TEACHERS}")
-    n_strings = len(load_instrument(instrument).strings)
-    labels = None
-    if labels_path is not None:
-        labels = read_labels(labels_path)
-    elif teacher != "auto":
-        raise ParameterError(f"--teacher {teacher} needs --labels LABELS.parquet")
+    pairs, labels = _checked_request(instrument, teacher, labels_path, pairs)
     lanes = lanes or DEFAULT_LANES
-    pairs = list(pairs) if pairs is not None else [(s, d) for s in range(n_strings)
-                                                   for d in DYNAMICS]
-    for s, d in pairs:
-        if not 0 <= s < n_strings or d not in DYNAMICS:
-            raise ParameterError(f"pair ({s}, {d!r}) is not a string x dynamic of the "
-                                 f"{instrument} (strings 0..{n_strings - 1}, {DYNAMICS})")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     todo = [(s, d) for s, d in pairs if not is_complete(out, pair_key(instrument, s, d))]
@@ -237,17 +229,52 @@ def train_instrument(instrument: str, out_dir: str | os.PathLike, *, teacher: st
             on_result(result)
 
     try:
-        if scheduler:
-            _run_dask(jobs, scheduler, done)
-        elif (workers or os.cpu_count() or 1) <= 1 or len(jobs) <= 1:
-            for job in jobs:
-                done(_job(job))
-        else:
-            _run_pool(jobs, int(workers or os.cpu_count() or 1), done)
+        _run_jobs(jobs, workers, scheduler, done)
     finally:
         bar.close()
     collect_labels(out)
     return results
+
+
+def _checked_request(instrument: str, teacher: str, labels_path: str | os.PathLike | None,
+                     pairs: Sequence[tuple[int, str]] | None,
+                     ) -> tuple[list[tuple[int, str]], pd.DataFrame | None]:
+    """The pairs to train (all by default) and the human labels, checked.
+
+    Raises
+    ------
+    ParameterError
+        An unknown teacher, a human teacher without labels, or a pair the instrument lacks.
+    """
+    from synth.strings import load_instrument
+
+    if teacher not in TEACHERS:
+        raise ParameterError(f"--teacher {teacher!r} must be one of {TEACHERS}")
+    n_strings = len(load_instrument(instrument).strings)
+    labels = None
+    if labels_path is not None:
+        labels = read_labels(labels_path)
+    elif teacher != "auto":
+        raise ParameterError(f"--teacher {teacher} needs --labels LABELS.parquet")
+    pairs = list(pairs) if pairs is not None else [(s, d) for s in range(n_strings)
+                                                   for d in DYNAMICS]
+    for s, d in pairs:
+        if not 0 <= s < n_strings or d not in DYNAMICS:
+            raise ParameterError(f"pair ({s}, {d!r}) is not a string x dynamic of the "
+                                 f"{instrument} (strings 0..{n_strings - 1}, {DYNAMICS})")
+    return pairs, labels
+
+
+def _run_jobs(jobs: list[tuple], workers: int | None, scheduler: str | None,
+              done: Callable[[dict], None]) -> None:
+    """Run the pair jobs on a dask cluster, in this process or on local workers."""
+    if scheduler:
+        _run_dask(jobs, scheduler, done)
+    elif (workers or os.cpu_count() or 1) <= 1 or len(jobs) <= 1:
+        for job in jobs:
+            done(_job(job))
+    else:
+        _run_pool(jobs, int(workers or os.cpu_count() or 1), done)
 
 
 def _run_pool(jobs: list[tuple], workers: int, done: Callable[[dict], None]) -> None:

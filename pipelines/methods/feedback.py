@@ -3,7 +3,7 @@
 The rules (:func:`pipelines.perform.rules.perform_part`) choose string and finger from the pitch,
 bow velocity and beta from the dynamic (the "bow lanes"), the bow direction and where the bow
 is lifted. :func:`hop_plan` samples that plan once per hop of 256 samples; the feedback loop
-(:func:`synth.listening.perform`) then plays it, choosing the bow force from what it hears
+(:func:`synth.listening.play_plan`) then plays it, choosing the bow force from what it hears
 with the string x dynamic classifiers in ``models_dir``. The returned actions table records
 what the controller actually did (one frame per hop per string).
 """
@@ -207,7 +207,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     """
     from synth.engines import get_engine
     from synth.listening.classifier import load_models
-    from synth.listening.controller import perform
+    from synth.listening.controller import play_plan
 
     if sample_rate not in (44100, 48000):
         raise ParameterError(f"sample_rate={sample_rate}: feedback control needs 44100 or "
@@ -221,8 +221,8 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     plan, span = hop_plan(perf, config, name, sample_rate=sample_rate)
     models = load_models(models_dir, name)
     inst = get_engine(engine, name, sample_rate=sample_rate, seed=seed)
-    log = perform(plan, models, inst, rng=np.random.default_rng([seed, 1]),
-                  settings=settings, record_diagnostics=diagnostics)
+    log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 1]),
+                    settings=settings, record_diagnostics=diagnostics)
     tail = inst.process(int(TAIL * sample_rate), {}, diagnostics=False).audio
     audio = np.concatenate([log.audio, tail]).astype(np.float32)
     actions = played_actions(perf, plan, span, log, sample_rate=sample_rate)
@@ -264,7 +264,7 @@ def diagnostics_table(log: PerformanceLog, sample_rate: int) -> pd.DataFrame:
     Parameters
     ----------
     log : PerformanceLog
-        Output of :func:`synth.listening.perform` with ``record_diagnostics``.
+        Output of :func:`synth.listening.play_plan` with ``record_diagnostics``.
     sample_rate : int, Hz
 
     Returns

@@ -405,7 +405,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
 
     The single integration point with :mod:`synth.listening.controller`: the hop plan of the
     sampled actions comes from :func:`pipelines.methods.feedback.hop_plan`; per string a
-    controller (:func:`synth.listening.controller.perform` with ``planned_force``, no range
+    controller (:func:`synth.listening.controller.play_plan` with ``planned_force``, no range
     clamp) holds a correction factor that starts at 1 on every stroke and is multiplied by
     ``K**(3 - c_avg)`` from the classes it hears; the force played is the sampled force
     times that factor (clipped to 0..50 N).
@@ -435,7 +435,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     from pipelines.perform.config import load_config
     from synth.engines import get_engine
     from synth.listening.classifier import load_models
-    from synth.listening.controller import ControllerSettings, perform
+    from synth.listening.controller import ControllerSettings, play_plan
     from synth.listening.features import HOP
 
     if sample_rate not in (44100, 48000):
@@ -461,9 +461,9 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
         target_speed[:, int(s)] = peak
     plan = dataclasses.replace(plan, target_speed=target_speed)
     inst = get_engine(engine, instrument, sample_rate=sample_rate, seed=seed)
-    log = perform(plan, models, inst, rng=np.random.default_rng([seed, 2]),
-                  settings=ControllerSettings(range_margin=0.0), record_diagnostics=True,
-                  planned_force=sampled)
+    log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 2]),
+                    settings=ControllerSettings(range_margin=0.0), record_diagnostics=True,
+                    planned_force=sampled)
     tail = inst.process(int(TAIL * sample_rate), {}).audio
     played = played_actions(perf, plan, span, log, sample_rate=sample_rate)
     y = np.concatenate([log.audio, tail]).astype(np.float32)

@@ -9,9 +9,9 @@ from synth.listening.classifier import (
     load_pair,
     save_pair,
 )
-from synth.listening.controller import ControllerSettings, HopPlan, perform
+from synth.listening.controller import ControllerSettings, HopPlan, play_plan
 from synth.listening.features import FEATURE_NAMES, StreamingFeatures, batch_features
 
 __all__ = ["DYNAMICS", "FEATURE_NAMES", "FINGERS", "ControllerSettings", "HopPlan",
            "ModelError", "PairModel", "StreamingFeatures", "batch_features", "load_models",
-           "load_pair", "perform", "save_pair"]
+           "load_pair", "play_plan", "save_pair"]

@@ -9,7 +9,7 @@ velocity and does not decelerate. Force and velocity get 1 % Gaussian jitter eac
 (a seeded generator); ``F >= 0``. A note starts at the initial force of its pair,
 interpolated by finger position.
 
-:func:`perform` plays a :class:`HopPlan` (per-hop controls planned by the rules: string,
+:func:`play_plan` plays a :class:`HopPlan` (per-hop controls planned by the rules: string,
 finger, velocity, beta, pair, note starts) with the controller owning the force.
 """
 
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from synth.controls import BowControl
+from synth.controls import Block, BowControl
 from synth.engines import Engine
 from synth.listening.classifier import PairModel
 from synth.listening.features import HOP, StreamingFeatures, yin_window_for
@@ -117,7 +117,7 @@ class ForceController:
             Planned speed of the note.
         noise : float, optional
             Standard normal draw of this hop's force jitter; default: drawn now from the
-            controller's generator (:func:`perform` pre-draws the same numbers in the same
+            controller's generator (:func:`play_plan` pre-draws the same numbers in the same
             order).
 
         Returns
@@ -191,7 +191,7 @@ class HopPlan:
 
 @dataclass
 class PerformanceLog:
-    """What :func:`perform` played and heard.
+    """What :func:`play_plan` played and heard.
 
     Attributes
     ----------
@@ -211,11 +211,11 @@ class PerformanceLog:
     diagnostics: dict = field(default_factory=dict)
 
 
-def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument: Engine, *,
-            rng: np.random.Generator, settings: ControllerSettings | None = None,
-            K: float | None = None, initial_force: float | None = None,
-            record_diagnostics: bool = False,
-            planned_force: np.ndarray | None = None) -> PerformanceLog:
+def play_plan(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument: Engine, *,
+              rng: np.random.Generator, settings: ControllerSettings | None = None,
+              K: float | None = None, initial_force: float | None = None,
+              record_diagnostics: bool = False,
+              planned_force: np.ndarray | None = None) -> PerformanceLog:
     """Play a hop plan with feedback control of the bow force.
 
     Without ``planned_force`` the controller owns the force (feedback control). With it,
@@ -246,87 +246,137 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
     -------
     PerformanceLog
     """
-    n, n_strings = plan.bowed.shape
-    sr = instrument.sample_rate
-    listeners: dict[int, StreamingFeatures] = {}
-    controllers: dict[int, ForceController] = {}
-    current: dict[int, str] = {}
-    audio = np.zeros(n * HOP, np.float32)
-    # Logs as flat lists (entry k * n_strings + s), arrays at the end.
-    force_log = [0.0] * (n * n_strings)
-    vel_log = [0.0] * (n * n_strings)
-    classes = [0] * (n * n_strings)
-    diag: dict[int, list] = {s: [] for s in range(n_strings)} if record_diagnostics else {}
-    features: dict[int, np.ndarray | None] = {}
-    jitter = (settings or ControllerSettings()).jitter
-    (first_bowed, bowed_strings, velocity, beta, semitones, expected_f0, target_speed,
-     dynamic, note_start, finger_change) = _flat_plan(plan)
-    planned = planned_force.ravel().tolist() if planned_force is not None else None
-    noise = _jitter_draws(plan, rng, jitter, planned_force is not None)
-    draw = 0
-    model_of: dict[tuple[int, str], PairModel] = {}
-    for k in range(n):
-        controls = {}
-        row = k * n_strings
-        for s in bowed_strings[first_bowed[k]:first_bowed[k + 1]]:
-            i = row + s
-            dyn = str(dynamic[i])
-            model = model_of.get((s, dyn))
-            if model is None:
-                model = model_of[(s, dyn)] = _model_for(models, s, dyn)
-            ctl = controllers.get(s)
-            if ctl is None:
-                ctl = controllers[s] = ForceController(model, rng, settings, K=K)
-            if current.get(s) != model.dynamic:
-                ctl.set_model(model, K=K)
-                current[s] = model.dynamic
-            if note_start[i]:
-                ctl.start_note(semitones[i], initial_force if planned_force is None else 1.0)
-                features[s] = None
-            elif finger_change[i] and planned_force is None:
-                old = semitones[i - n_strings] if k else semitones[i]
-                ctl.rescale(model.initial_force(semitones[i])
-                            / max(model.initial_force(old), 1e-9))
+    loop = _HopLoop(plan, models, instrument.sample_rate, rng=rng, settings=settings, K=K,
+                    initial_force=initial_force, record_diagnostics=record_diagnostics,
+                    planned_force=planned_force)
+    for k in range(plan.n_hops):
+        controls = loop.controls(k)
+        plucks = plan.plucks[k] if plan.plucks else ()
+        block = instrument.process(HOP, controls, plucks=plucks,
+                                   diagnostics=record_diagnostics)
+        loop.hear(k, block, controls)
+    return loop.log()
+
+
+class _HopLoop:
+    """What :func:`play_plan` keeps from hop to hop: controllers, listeners and the logs.
+
+    The plan is read from flat lists (entry ``k * n_strings + s``, :func:`_flat_plan`) and
+    the jitter from pre-drawn numbers (:func:`_jitter_draws`), consumed in hop order.
+    """
+
+    def __init__(self, plan: HopPlan, models: dict[tuple[int, str], PairModel],
+                 sample_rate: int, *, rng: np.random.Generator,
+                 settings: ControllerSettings | None, K: float | None,
+                 initial_force: float | None, record_diagnostics: bool,
+                 planned_force: np.ndarray | None) -> None:
+        n, n_strings = plan.bowed.shape
+        self.n_hops, self.n_strings, self.sample_rate = n, n_strings, sample_rate
+        self.models, self.rng, self.settings, self.K = models, rng, settings, K
+        self.initial_force = initial_force
+        self.corrects = planned_force is not None
+        self.record_diagnostics = record_diagnostics
+        self.listeners: dict[int, StreamingFeatures] = {}
+        self.controllers: dict[int, ForceController] = {}
+        self.current: dict[int, str] = {}
+        self.model_of: dict[tuple[int, str], PairModel] = {}
+        self.features: dict[int, np.ndarray | None] = {}
+        self.audio = np.zeros(n * HOP, np.float32)
+        # Logs as flat lists (entry k * n_strings + s), arrays at the end.
+        self.force_log = [0.0] * (n * n_strings)
+        self.vel_log = [0.0] * (n * n_strings)
+        self.classes = [0] * (n * n_strings)
+        self.diag: dict[int, list] = ({s: [] for s in range(n_strings)}
+                                      if record_diagnostics else {})
+        self.jitter = (settings or ControllerSettings()).jitter
+        (self.first_bowed, self.bowed_strings, self.velocity, self.beta, self.semitones,
+         self.expected_f0, self.target_speed, self.dynamic, self.note_start,
+         self.finger_change) = _flat_plan(plan)
+        self.planned = planned_force.ravel().tolist() if planned_force is not None else None
+        self.noise = _jitter_draws(plan, rng, self.jitter, self.corrects)
+        self.draw = 0
+
+    def _controller(self, s: int, dyn: str) -> tuple[ForceController, PairModel]:
+        """The string's controller, switched to the pair of dynamic ``dyn``."""
+        model = self.model_of.get((s, dyn))
+        if model is None:
+            model = self.model_of[(s, dyn)] = _model_for(self.models, s, dyn)
+        ctl = self.controllers.get(s)
+        if ctl is None:
+            ctl = self.controllers[s] = ForceController(model, self.rng, self.settings,
+                                                        K=self.K)
+        if self.current.get(s) != model.dynamic:
+            ctl.set_model(model, K=self.K)
+            self.current[s] = model.dynamic
+        return ctl, model
+
+    def _steer(self, ctl: ForceController, model: PairModel, k: int, s: int, i: int) -> None:
+        """Start a note, rescale at a finger change, or apply the control law (entry i)."""
+        semitones = self.semitones
+        if self.note_start[i]:
+            ctl.start_note(semitones[i], self.initial_force if not self.corrects else 1.0)
+            self.features[s] = None
+        elif self.finger_change[i] and not self.corrects:
+            old = semitones[i - self.n_strings] if k else semitones[i]
+            ctl.rescale(model.initial_force(semitones[i])
+                        / max(model.initial_force(old), 1e-9))
+        else:
+            speed = abs(self.velocity[i - self.n_strings]) if k else 0.0
+            if self.jitter:
+                self.classes[i] = ctl.step(self.features.get(s), speed, self.target_speed[i],
+                                           self.noise[self.draw])
+                self.draw += 1
             else:
-                speed = abs(velocity[i - n_strings]) if k else 0.0
-                if jitter:
-                    classes[i] = ctl.step(features.get(s), speed, target_speed[i],
-                                          noise[draw])
-                    draw += 1
-                else:
-                    classes[i] = ctl.step(features.get(s), speed, target_speed[i])
-            v = velocity[i]
+                self.classes[i] = ctl.step(self.features.get(s), speed, self.target_speed[i])
+
+    def controls(self, k: int) -> dict[int, BowControl]:
+        """Bowing of every bowed string at the end of hop ``k`` (logged)."""
+        controls = {}
+        row = k * self.n_strings
+        jitter, noise, semitones, planned = self.jitter, self.noise, self.semitones, self.planned
+        for s in self.bowed_strings[self.first_bowed[k]:self.first_bowed[k + 1]]:
+            i = row + s
+            ctl, model = self._controller(s, str(self.dynamic[i]))
+            self._steer(ctl, model, k, s, i)
+            v = self.velocity[i]
             if jitter:
-                v *= 1.0 + jitter * noise[draw]
-                draw += 1
+                v *= 1.0 + jitter * noise[self.draw]
+                self.draw += 1
             v = min(max(v, -5.0), 5.0)
             ratio = 1.0 - 2.0 ** (-semitones[i] / 12.0)
             force = ctl.force if planned is None else min(max(planned[i] * ctl.force, 0.0),
                                                           MAX_FORCE)
-            controls[s] = BowControl(v, force, beta[i], min(ratio, 0.8))
-            force_log[i] = force
-            vel_log[i] = v
-        plucks = plan.plucks[k] if plan.plucks else ()
-        block = instrument.process(HOP, controls, plucks=plucks,
-                                   diagnostics=record_diagnostics)
-        if record_diagnostics:
+            controls[s] = BowControl(v, force, self.beta[i], min(ratio, 0.8))
+            self.force_log[i] = force
+            self.vel_log[i] = v
+        return controls
+
+    def hear(self, k: int, block: Block, controls: dict[int, BowControl]) -> None:
+        """Keep hop ``k``'s audio (and diagnostics); each bowed string's listener hears it."""
+        if self.record_diagnostics:
             for s, d in block.diagnostics.items():
-                diag[s].append((k, d))
+                self.diag[s].append((k, d))
         hop_audio = block.audio
-        audio[k * HOP:(k + 1) * HOP] = hop_audio
+        self.audio[k * HOP:(k + 1) * HOP] = hop_audio
+        row = k * self.n_strings
+        sr = self.sample_rate
         for s in controls:
-            lis = listeners.get(s)
-            f0 = expected_f0[row + s]
+            lis = self.listeners.get(s)
+            f0 = self.expected_f0[row + s]
             if lis is None:
-                lis = listeners[s] = StreamingFeatures(sr, yin_window=yin_window_for(f0, sr))
-            if note_start[row + s]:
+                lis = self.listeners[s] = StreamingFeatures(sr,
+                                                            yin_window=yin_window_for(f0, sr))
+            if self.note_start[row + s]:
                 lis.reset()
             feats = lis.push(hop_audio, f0)
-            features[s] = feats if lis.ready else None
-    shape = (n, n_strings)
-    return PerformanceLog(audio, np.array(force_log, np.float64).reshape(shape),
-                          np.array(vel_log, np.float64).reshape(shape),
-                          np.array(classes, np.int64).reshape(shape), diag)
+            self.features[s] = feats if lis.ready else None
+
+    def log(self) -> PerformanceLog:
+        """What was played and heard."""
+        shape = (self.n_hops, self.n_strings)
+        return PerformanceLog(self.audio, np.array(self.force_log, np.float64).reshape(shape),
+                              np.array(self.vel_log, np.float64).reshape(shape),
+                              np.array(self.classes, np.int64).reshape(shape), self.diag)
 
 
 def _flat_plan(plan: HopPlan) -> tuple[list, ...]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 
 from data_schemas.errors import ParameterError
 
@@ -28,6 +29,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--quick", action="store_true",
                    help="smaller searches (fewer K candidates and repeats; for demos)")
     p.add_argument("--config", metavar="RULES.toml", help="rules settings (bow lanes)")
+    p.add_argument("--listening-config", metavar="LISTENING.toml",
+                   help="control law and teacher thresholds (default: "
+                        "synth/listening/config/listening.toml)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -49,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
     """Train and print one line per pair."""
     from pipelines.listening.train import train_instrument
     from pipelines.perform.config import dynamic_table, load_config
+    from synth.listening.settings_file import load_listening_settings
     from synth.listening.training import QUICK, TrainingSettings
 
     if args.workers is not None and args.workers < 1:
@@ -57,10 +62,14 @@ def run(args: argparse.Namespace) -> int:
     levels = {"p": 3, "mp": 4, "mf": 5, "f": 6}
     lanes = {d: (float(dynamic_table(config, "velocity", [lv])[0]),
                  float(dynamic_table(config, "beta", [lv])[0])) for d, lv in levels.items()}
+    settings = QUICK if args.quick else TrainingSettings()
+    if args.listening_config:
+        listening = load_listening_settings(args.listening_config)
+        settings = replace(settings, controller=listening.controller,
+                           thresholds=listening.teacher)
     results = train_instrument(
         args.instrument, args.output, teacher=args.teacher, labels_path=args.labels,
-        pairs=_pairs(args.pairs), lanes=lanes,
-        settings=QUICK if args.quick else TrainingSettings(), workers=args.workers,
+        pairs=_pairs(args.pairs), lanes=lanes, settings=settings, workers=args.workers,
         scheduler=args.scheduler, seed=args.seed, progress=not args.quiet)
     for r in sorted(results, key=lambda r: r["key"]):
         forces = ", ".join(f"{f:.3g}" for f in r["initial_forces"])

@@ -2,8 +2,9 @@
 
 numpy's and scipy's FFTs cannot be called from inside a numba kernel; computing a hop's
 features in one numba call (instead of four numpy FFT calls and their Python overhead)
-needs its own. Radix-2, decimation in time; tested against ``numpy.fft`` in
-``tests/test_listening_features.py``.
+needs its own. Radix-2, decimation in time; :func:`rfft_tables` allocates the tables the
+kernels read. Tested against ``numpy.fft`` (their twin) in
+``tests/test_listening_features_kernel.py``.
 """
 
 from __future__ import annotations
