@@ -27,8 +27,11 @@ VIOLIN_SIGNATURE_MODES = (
     (550.0, 35.0, 1.3),   # B1+
 )
 BRIDGE_HILL_HZ = 2400.0
-ROLL_OFF_START_HZ = 3000.0
-ROLL_OFF_DB_PER_OCTAVE = 15.0
+ROLL_OFF_START_HZ = float(os.environ.get("ARCO_ROLL_START", 3000.0))
+ROLL_OFF_DB_PER_OCTAVE = float(os.environ.get("ARCO_ROLL_DB", 15.0))
+RADIATION_HIGH_PASS_HZ = float(os.environ.get("ARCO_HP_HZ", 0.0))
+RADIATION_HIGH_PASS_ORDER = int(os.environ.get("ARCO_HP_ORDER", 2))
+HILL_GAIN = float(os.environ.get("ARCO_HILL", 1.5))
 
 
 @functools.lru_cache(maxsize=16)
@@ -81,6 +84,10 @@ def _synthesize(sample_rate: int, *, body_scale: float, duration: float,
     tail = n // 4
     fade[-tail:] = np.cos(np.linspace(0.0, 0.5 * np.pi, tail)) ** 2
     ir *= fade
+    if RADIATION_HIGH_PASS_HZ > 0:
+        b, a = scipy.signal.butter(RADIATION_HIGH_PASS_ORDER, RADIATION_HIGH_PASS_HZ * body_scale,
+                                   btype="highpass", fs=sample_rate)
+        ir = scipy.signal.lfilter(b, a, ir)
     return ir / np.sqrt(np.sum(ir**2))
 
 
@@ -92,7 +99,7 @@ def _resonator(t: np.ndarray, freq: float, q: float, amp: float) -> np.ndarray:
 
 def _envelope(freq: float, body_scale: float) -> float:
     """Spectral envelope of the dense modes: bridge hill and high-frequency roll-off."""
-    hill = 1.0 + 1.5 * np.exp(-0.5 * (np.log2(freq / (BRIDGE_HILL_HZ * body_scale)) / 0.2) ** 2)
+    hill = 1.0 + HILL_GAIN * np.exp(-0.5 * (np.log2(freq / (BRIDGE_HILL_HZ * body_scale)) / 0.2) ** 2)
     start = ROLL_OFF_START_HZ * body_scale
     roll = 1.0 if freq <= start else 10.0 ** (-ROLL_OFF_DB_PER_OCTAVE * np.log2(freq / start) / 20)
     return float(hill * roll * 0.5)

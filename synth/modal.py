@@ -10,7 +10,7 @@ change of bow position (``beta``) or finger, never inside the sample loop; the l
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -39,6 +39,7 @@ from synth.modal_kernel import (
     STATE_W,
 )
 from synth.strings import StringConstants
+from synth.torsion import TorsionModes, no_torsion, torsion_modes
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,8 @@ class ModeBasis:
         End-of-step modal displacement and velocity per unit modal force (1/rho_L included).
     bridge_gain : np.ndarray [shape=(n_modes,)], N/m
         Bridge force per unit modal amplitude, sqrt(2/L) (T k_n + EI k_n**3).
+    frequency_limit : float, Hz
+        Modes are kept below this frequency (at most the Nyquist frequency).
     """
 
     string: StringConstants
@@ -67,6 +70,7 @@ class ModeBasis:
     force_to_displacement: np.ndarray
     force_to_velocity: np.ndarray
     bridge_gain: np.ndarray
+    frequency_limit: float = math.inf
 
     @property
     def n_modes(self) -> int:
@@ -120,7 +124,8 @@ def mode_basis(
     free, to_disp, to_vel = _exact_step(omega, decay, 1.0 / sample_rate, string.linear_density)
     bridge = math.sqrt(2.0 / string.length) * (string.tension * k
                                                + string.bending_stiffness * k**3)
-    return ModeBasis(string, float(sample_rate), omega, decay, free, to_disp, to_vel, bridge)
+    return ModeBasis(string, float(sample_rate), omega, decay, free, to_disp, to_vel, bridge,
+                     float(limit))
 
 
 def modal_decay_rates(string: StringConstants, frequency: np.ndarray) -> np.ndarray:
@@ -165,9 +170,12 @@ class ContactCoefficients:
     push_finger: np.ndarray  # (2, n_modes)
     gains: np.ndarray  # (N_GAINS,) see contact_coefficients
     fingered: bool
+    torsion: TorsionModes = field(default_factory=no_torsion)
+    torsion_push_bow: np.ndarray = field(default_factory=lambda: np.zeros((2, 0)))
 
 
-def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float) -> ContactCoefficients:
+def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float,
+                         n_torsion: int = 0) -> ContactCoefficients:
     """Precompute the bow and finger contact coefficients.
 
     Parameters
@@ -178,6 +186,9 @@ def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float) -> 
         Bow-bridge distance / effective string length, 0 < beta < 0.5.
     finger_ratio : float
         Fraction of the string length removed by the finger (0 = open string).
+    n_torsion : int
+        Torsional modes coupled at the bow (:func:`synth.torsion.torsion_mode_count`); their
+        surface velocity adds to the bow-point velocity, so to ``H_bb``.
 
     Returns
     -------
@@ -206,7 +217,15 @@ def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float) -> 
     gains[GAIN_H_FB] = np.sum(phi_f * phi_b * h)
     gains[GAIN_BRIDGE_BOW] = np.sum(basis.bridge_gain * g * phi_b)
     gains[GAIN_BRIDGE_FINGER] = np.sum(basis.bridge_gain * g * phi_f)
-    return ContactCoefficients(phi_b, phi_f, push_b, push_f, gains, fingered)
+    if not n_torsion:
+        return ContactCoefficients(phi_b, phi_f, push_b, push_f, gains, fingered)
+    tors = torsion_modes(basis.string, effective, beta * effective, basis.sample_rate,
+                         basis.frequency_limit, n_torsion)
+    tg, th, phi_t = tors.force_to_displacement, tors.force_to_velocity, tors.shape_bow
+    t_aa, t_av, t_va, t_vv = tors.free
+    gains[GAIN_H_BB] += np.sum(phi_t * phi_t * th)
+    push_t = np.stack([(t_aa * tg + t_av * th) * phi_t, (t_va * tg + t_vv * th) * phi_t])
+    return ContactCoefficients(phi_b, phi_f, push_b, push_f, gains, fingered, tors, push_t)
 
 
 #: The kernel's arrays start on this boundary (bytes) and hold a multiple of
@@ -258,9 +277,12 @@ def pack_coefficients(basis: ModeBasis, coeffs: ContactCoefficients) -> np.ndarr
     the bridge force is the sum of A', the bow-point velocity sum(S_b W') and the finger's
     displacement and velocity sum(S_fA A') and sum(S_fW W').
 
+    Torsional modes (which do not drive the bridge) follow the padded transverse modes in
+    state coordinates (A, W) = (a, c_av v), read only at the bow.
+
     Returns
     -------
-    np.ndarray [shape=(N_COEFFICIENT_ROWS, padded_modes(n_modes))]
+    np.ndarray [shape=(N_COEFFICIENT_ROWS, padded_modes(n_modes) + padded_modes(n_torsion))]
         Rows (indices ``synth.modal_kernel.ROW_*``): c_aa, c_WA, c_vv; P_Ab, P_Wb, P_Af,
         P_Wf (N per N of contact force); S_b (m/s per N), S_fA (m per N), S_fW (m/s per N).
         Aligned, with zero coefficients for the padding modes (they never move).
@@ -268,7 +290,10 @@ def pack_coefficients(basis: ModeBasis, coeffs: ContactCoefficients) -> np.ndarr
     c_aa, c_av, c_va, c_vv = basis.free
     scale = state_scale(basis)
     scale_a, scale_w = scale[STATE_A], scale[STATE_W]
-    packed = aligned_zeros((N_COEFFICIENT_ROWS, padded_modes(basis.n_modes)))
+    n_bridge = padded_modes(basis.n_modes)
+    tors = coeffs.torsion
+    packed = aligned_zeros((N_COEFFICIENT_ROWS, n_bridge + padded_modes(tors.n_modes)))
+    _pack_torsion(packed[:, n_bridge:n_bridge + tors.n_modes], tors, coeffs.torsion_push_bow)
     rows = packed[:, :basis.n_modes]
     rows[ROW_FREE_AA] = c_aa
     rows[ROW_FREE_WA] = c_av * c_va
@@ -281,3 +306,28 @@ def pack_coefficients(basis: ModeBasis, coeffs: ContactCoefficients) -> np.ndarr
     rows[ROW_READ_FINGER_A] = coeffs.shape_finger / scale_a
     rows[ROW_READ_FINGER_W] = coeffs.shape_finger / scale_w
     return packed
+
+
+def _pack_torsion(rows: np.ndarray, tors: TorsionModes, push_bow: np.ndarray) -> None:
+    """Write the torsional modes' rows (state (a, c_av v); no finger, no bridge)."""
+    if not tors.n_modes:
+        return
+    t_aa, t_av, t_va, t_vv = tors.free
+    live = t_av != 0.0
+    scale_w = np.where(live, t_av, 1.0)
+    rows[ROW_FREE_AA] = t_aa
+    rows[ROW_FREE_WA] = t_av * t_va
+    rows[ROW_FREE_WW] = t_vv
+    rows[ROW_PUSH_A_BOW] = push_bow[0]
+    rows[ROW_PUSH_W_BOW] = scale_w * push_bow[1]
+    rows[ROW_READ_BOW_W] = np.where(live, tors.shape_bow / scale_w, 0.0)
+
+
+def kernel_state(basis: ModeBasis, n_torsion: int = 0) -> np.ndarray:
+    """Zero kernel state (A, W) for the padded transverse modes then the torsional ones."""
+    return aligned_zeros((2, padded_modes(basis.n_modes) + padded_modes(n_torsion)))
+
+
+def bridge_mode_count(basis: ModeBasis) -> int:
+    """Columns of the packed arrays that drive the bridge (the padded transverse modes)."""
+    return padded_modes(basis.n_modes)

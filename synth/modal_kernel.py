@@ -36,29 +36,41 @@ N_COEFFICIENT_ROWS = 10
  GAIN_BRIDGE_FINGER) = range(8)
 N_GAINS = 8
 #: Entries of the friction parameters (:func:`pack_friction`).
-FRICTION_MU_S, FRICTION_MU_D, FRICTION_V0, FRICTION_NOISE_DEPTH = 0, 1, 2, 3
+(FRICTION_MU_S, FRICTION_MU_D, FRICTION_V0, FRICTION_NOISE_DEPTH, FRICTION_MODEL,
+ FRICTION_HEATING, FRICTION_COOLING) = range(7)
+N_FRICTION = 7
+#: Friction models (entry ``FRICTION_MODEL``): the hyperbolic curve in the slip speed, or
+#: rosin whose friction falls as the contact heats.
+HYPERBOLIC, THERMAL = 0, 1
 #: Entries of the finger spring (:func:`pack_finger_spring`).
 SPRING_STIFFNESS, SPRING_DAMPING = 0, 1
 #: Rows of the modal state, (A, W) per mode (:func:`synth.modal.state_scale`).
 STATE_A, STATE_W = 0, 1
-#: Entries of the previous sample's contact forces.
-FORCE_BOW, FORCE_FINGER = 0, 1
+#: Entries of the state carried between samples: the previous sample's contact forces (N)
+#: and the rosin's heating (dimensionless: the static friction's excess over mu_d is
+#: scaled by exp(-heating)).
+FORCE_BOW, FORCE_FINGER, ROSIN_HEATING = 0, 1, 2
+N_CARRIED = 3
 
 
 @njit(cache=True, fastmath=_FAST, error_model="numpy")
-def advance_string(modal_state, last_forces, coefficients, gains, finger_spring, friction,
-                   fingered, bow_velocity, bow_force, contact, noise, noise_used,
+def advance_string(modal_state, carried, coefficients, n_bridge, gains, finger_spring,
+                   friction, fingered, bow_velocity, bow_force, contact, noise, noise_used,
                    out_bridge, out_slip_velocity, out_stick_slip):  # pragma: no cover - numba
     """Advance one string by ``bow_velocity.size`` samples; see :mod:`synth.modal`.
 
     ``modal_state`` [shape=(2, n_modes)] holds each mode's (A, W) = (B a, B c_av v), N
-    (:func:`synth.modal.state_scale`), and ``last_forces`` the bow and finger forces (N)
-    of the previous sample; both are updated in place. The states exclude ``last_forces``,
-    which the next free step folds in through the push rows of ``coefficients``
-    [shape=(N_COEFFICIENT_ROWS, n_modes)] (rows ``ROW_*``).
+    (:func:`synth.modal.state_scale`): the first ``n_bridge`` modes are transverse and
+    their A sum to the bridge force; the rest are torsional (A = a, no bridge force, read
+    at the bow only). ``carried`` (entries ``FORCE_*``, ``ROSIN_HEATING``) holds the bow
+    and finger forces (N) of the previous sample and the rosin's heating; both arrays are
+    updated in place. The states exclude the carried forces, which the next free step
+    folds in through the push rows of ``coefficients`` [shape=(N_COEFFICIENT_ROWS,
+    n_modes)] (rows ``ROW_*``).
     ``gains`` (entries ``GAIN_*``) = (H_bb, H_bf, G_ff, G_fb, H_ff, H_fb, bridge per bow
-    force, bridge per finger force), ``friction`` (``FRICTION_*``) = (mu_s, mu_d, v0 m/s,
-    noise depth), ``finger_spring`` (``SPRING_*``) = (K N/m, R N s/m). ``contact`` holds a
+    force, bridge per finger force), ``friction`` (``FRICTION_*``, :func:`pack_friction`)
+    = (mu_s, mu_d, v0 m/s, noise depth, model, heating per joule, cooling per sample),
+    ``finger_spring`` (``SPRING_*``) = (K N/m, R N s/m). ``contact`` holds a
     ``CONTACT_*`` per sample. Writes bridge force (N), slip velocity (m/s) and stick-slip
     state (``OFF_STRING``, ``STICKING``, ``SLIPPING``) per sample.
     ``noise`` holds uniform draws of friction noise, consumed one per slipping sample in
@@ -86,7 +98,10 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
     stiffness, damping = finger_spring[SPRING_STIFFNESS], finger_spring[SPRING_DAMPING]
     mu_s, mu_d = friction[FRICTION_MU_S], friction[FRICTION_MU_D]
     v0_nominal, noise_depth = friction[FRICTION_V0], friction[FRICTION_NOISE_DEPTH]
-    f_bow, f_finger = last_forces[FORCE_BOW], last_forces[FORCE_FINGER]
+    thermal = friction[FRICTION_MODEL] == THERMAL
+    heating_per_joule, cooling = friction[FRICTION_HEATING], friction[FRICTION_COOLING]
+    f_bow, f_finger = carried[FORCE_BOW], carried[FORCE_FINGER]
+    heating = carried[ROSIN_HEATING]
     # The finger force is linear in the bow force, f_finger = p + q f_bow, with q constant;
     # so is the bow-point admittance (end-of-step velocity per bow force, s/kg).
     finger_gain = 1.0 / (1.0 + stiffness * g_ff + damping * h_ff)
@@ -106,7 +121,7 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
         if fingered:
             y_finger = 0.0
             v_finger = 0.0
-            for n in range(n_modes):
+            for n in range(n_bridge):
                 a = modal_a[n]
                 w = modal_w[n]
                 a_new = c_aa[n] * a + w + pa_b[n] * f_bow + pa_f[n] * f_finger
@@ -119,7 +134,7 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
                 bridge += a_new
             p = -(stiffness * y_finger + damping * v_finger) * finger_gain
         else:
-            for n in range(n_modes):
+            for n in range(n_bridge):
                 a = modal_a[n]
                 w = modal_w[n]
                 a_new = c_aa[n] * a + w + pa_b[n] * f_bow
@@ -128,6 +143,14 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
                 modal_w[n] = w_new
                 v_bow_point += read_b[n] * w_new
                 bridge += a_new
+        for n in range(n_bridge, n_modes):  # torsion: read at the bow, no bridge force
+            a = modal_a[n]
+            w = modal_w[n]
+            a_new = c_aa[n] * a + w + pa_b[n] * f_bow
+            w_new = c_wa[n] * a + c_ww[n] * w + pw_b[n] * f_bow
+            modal_a[n] = a_new
+            modal_w[n] = w_new
+            v_bow_point += read_b[n] * w_new
         v_free = v_bow_point + h_bf * p
         contact_now = contact[t]
         slip = 0.0
@@ -138,25 +161,36 @@ def advance_string(modal_state, last_forces, coefficients, gains, finger_spring,
             dv = bow_velocity[t] - v_free
             f_stick = dv * inverse_admittance
             normal = bow_force[t]
-            if contact_now == CONTACT_GRIP or abs(f_stick) <= mu_s * normal:
+            static = mu_s
+            if thermal:
+                static = mu_d + (mu_s - mu_d) * math.exp(-heating)
+            if contact_now == CONTACT_GRIP or abs(f_stick) <= static * normal:
                 f_bow = f_stick
                 out_stick_slip[t] = STICKING
             else:
-                # Hyperbolic friction, solved in closed form for the slip speed.
-                v0 = v0_nominal * (1.0 - noise_depth * noise[next_noise])
-                next_noise += 1
                 d = abs(dv)
-                b = v0 - d + admittance * normal * mu_d
-                c = -v0 * (d - admittance * normal * mu_s)
-                slip = 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
-                mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
+                if thermal:
+                    # Rosin friction at the contact's heating: Coulomb, so the slip speed
+                    # follows directly.
+                    mu = mu_d + (static - mu_d) * (1.0 - noise_depth * noise[next_noise])
+                    slip = d - admittance * normal * mu
+                else:
+                    # Hyperbolic friction, solved in closed form for the slip speed.
+                    v0 = v0_nominal * (1.0 - noise_depth * noise[next_noise])
+                    b = v0 - d + admittance * normal * mu_d
+                    c = -v0 * (d - admittance * normal * mu_s)
+                    slip = 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
+                    mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
+                next_noise += 1
                 f_bow = math.copysign(normal * mu, dv)
                 out_stick_slip[t] = SLIPPING
         f_finger = p + q * f_bow
+        heating = heating * cooling + abs(f_bow) * slip * heating_per_joule
         out_bridge[t] = bridge + br_b * f_bow + br_f * f_finger
         out_slip_velocity[t] = slip
-    last_forces[FORCE_BOW] = f_bow
-    last_forces[FORCE_FINGER] = f_finger
+    carried[FORCE_BOW] = f_bow
+    carried[FORCE_FINGER] = f_finger
+    carried[ROSIN_HEATING] = heating
     noise_used[0] = next_noise
     return done
 
@@ -166,7 +200,9 @@ def empty_outputs(n_samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return (np.empty(n_samples), np.empty(n_samples), np.empty(n_samples, dtype=np.int8))
 
 
-def pack_friction(mu_s: float, mu_d: float, v0: float, noise_depth: float) -> np.ndarray:
+def pack_friction(mu_s: float, mu_d: float, v0: float, noise_depth: float, *,
+                  model: int = HYPERBOLIC, rosin_heat: float = 1.0,
+                  rosin_cooling_time: float = 1.0, sample_rate: float = 1.0) -> np.ndarray:
     """The kernel's ``friction`` array (entries ``FRICTION_*``).
 
     Parameters
@@ -176,11 +212,28 @@ def pack_friction(mu_s: float, mu_d: float, v0: float, noise_depth: float) -> np
     v0 : float, m/s
         Velocity scale of the hyperbolic friction curve.
     noise_depth : float
-        Depth of the multiplicative noise on v0.
+        Depth of the friction noise (on v0, or on the thermal friction's excess over mu_d).
+    model : {HYPERBOLIC, THERMAL}
+    rosin_heat : float, J
+        Heat that lowers the static friction's excess over mu_d by a factor e (thermal).
+    rosin_cooling_time : float, s
+        Cooling time constant of the contact (thermal).
+    sample_rate : float, Hz
+        Internal rate (per-sample heating and cooling).
+
+    Examples
+    --------
+    >>> f = pack_friction(0.7, 0.3, 0.3, 0.02, model=THERMAL, rosin_heat=1e-5,
+    ...                   rosin_cooling_time=3e-5, sample_rate=88200.0)
+    >>> f[FRICTION_MODEL] == THERMAL, round(float(f[FRICTION_COOLING]), 3)
+    (True, 0.685)
     """
-    out = np.empty(4)
+    out = np.empty(N_FRICTION)
     out[FRICTION_MU_S], out[FRICTION_MU_D] = mu_s, mu_d
     out[FRICTION_V0], out[FRICTION_NOISE_DEPTH] = v0, noise_depth
+    out[FRICTION_MODEL] = model
+    out[FRICTION_HEATING] = 1.0 / (rosin_heat * sample_rate)
+    out[FRICTION_COOLING] = np.exp(-1.0 / (rosin_cooling_time * sample_rate))
     return out
 
 

@@ -47,6 +47,19 @@ class StringConstants:
         Middle of the model's Helmholtz force range at beta 0.1 and 0.3 m/s.
     bowed_pitch_offset_cents : float, cents
         How far the bowed open string sounds above its first mode.
+    torsion_frequency_ratio : float
+        Torsional fundamental / transverse fundamental (0: no torsion; :mod:`synth.torsion`).
+    torsion_impedance_ratio : float
+        Torsional impedance at the string's surface / transverse impedance Z0.
+    torsion_q : float
+        Quality factor of every torsional mode.
+    friction_model : {"hyperbolic", "thermal"}
+        Bow friction: the hyperbolic friction curve in the slip speed, or rosin whose
+        friction falls as the contact heats (:mod:`synth.modal_kernel`).
+    rosin_heat : float, J
+        Heat in the contact that lowers the static part of the friction by a factor e.
+    rosin_cooling_time : float, s
+        Time constant of the contact's cooling.
     """
 
     name: str
@@ -65,6 +78,12 @@ class StringConstants:
     finger_damping: float
     reference_force: float = 1.0
     bowed_pitch_offset_cents: float = 0.0
+    torsion_frequency_ratio: float = 0.0
+    torsion_impedance_ratio: float = 1.0
+    torsion_q: float = 10.0
+    friction_model: str = "hyperbolic"
+    rosin_heat: float = 1.0e-5
+    rosin_cooling_time: float = 3.0e-5
 
     @property
     def bending_stiffness(self) -> float:
@@ -111,6 +130,10 @@ def _config_path() -> Path:
 
 
 TUNINGS = ("bowed", "first_mode", "published")
+#: Keys of ``[defaults]`` that every string takes unless it sets its own.
+PER_STRING_DEFAULTS = ("finger_stiffness", "finger_damping", "damping_b1", "damping_b2",
+                       "torsion_frequency_ratio", "torsion_impedance_ratio", "torsion_q",
+                       "friction_model", "rosin_heat", "rosin_cooling_time")
 
 
 @cache
@@ -119,8 +142,7 @@ def _load_all(path: str, tuning: str) -> dict[str, InstrumentConstants]:
         data = tomllib.load(fh)
     defaults = data.get("defaults", {})
     tuning_a4 = float(defaults.get("tuning_a4", 440.0))
-    per_string = {k: defaults[k] for k in
-                  ("finger_stiffness", "finger_damping", "damping_b1", "damping_b2")}
+    per_string = {k: defaults[k] for k in PER_STRING_DEFAULTS if k in defaults}
     out = {}
     for inst in data["instrument"]:
         strings = []

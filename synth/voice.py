@@ -9,19 +9,28 @@ import numpy as np
 from synth.modal import (
     ModeBasis,
     aligned_zeros,
+    bridge_mode_count,
     contact_coefficients,
+    kernel_state,
     mode_basis,
     pack_coefficients,
     padded_modes,
     state_scale,
 )
 from synth.modal_kernel import (
+    HYPERBOLIC,
+    N_CARRIED,
     STATE_A,
+    THERMAL,
     advance_string,
     pack_finger_spring,
     pack_friction,
 )
 from synth.strings import StringConstants
+from synth.torsion import torsion_mode_count
+
+#: Friction models by the name strings.toml uses.
+FRICTION_MODELS = {"hyperbolic": HYPERBOLIC, "thermal": THERMAL}
 
 #: Resolution of beta and finger_ratio at which contact coefficients are recomputed.
 BETA_RESOLUTION = 1e-4
@@ -77,13 +86,20 @@ class StringVoice:
         self.basis: ModeBasis = mode_basis(string, internal_rate, max_modes=max_modes,
                                            max_frequency=max_mode_frequency)
         self.rng = rng
-        self.state = aligned_zeros((2, padded_modes(self.basis.n_modes)))
-        # The kernel keeps A = bridge gain x displacement; silence is judged on displacement.
-        self._silent_level = np.full(self.state.shape[1], np.inf)
+        self.n_torsion = torsion_mode_count(string, self.basis.frequency_limit)
+        self.n_bridge = bridge_mode_count(self.basis)
+        self.state = kernel_state(self.basis, self.n_torsion)
+        # The kernel keeps A = bridge gain x displacement (transverse) or the displacement
+        # (torsion); silence is judged on displacement.
+        self._silent_level = np.full(self.state.shape[1], SILENT_AMPLITUDE)
+        self._silent_level[self.basis.n_modes:self.n_bridge] = np.inf
         self._silent_level[:self.basis.n_modes] = (SILENT_AMPLITUDE
                                                    * state_scale(self.basis)[STATE_A])
-        self.last_forces = np.zeros(2)
-        self.friction = pack_friction(string.mu_s, string.mu_d, string.v0, friction_noise)
+        self.carried = np.zeros(N_CARRIED)
+        self.friction = pack_friction(
+            string.mu_s, string.mu_d, string.v0, friction_noise,
+            model=FRICTION_MODELS[string.friction_model], rosin_heat=string.rosin_heat,
+            rosin_cooling_time=string.rosin_cooling_time, sample_rate=internal_rate)
         self.finger_spring = pack_finger_spring(string.finger_stiffness, string.finger_damping)
         self._cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, bool]] = {}
         self._noise = np.zeros(0)
@@ -93,7 +109,7 @@ class StringVoice:
     def reset(self) -> None:
         """Bring the string to rest."""
         self.state[:] = 0.0
-        self.last_forces[:] = 0.0
+        self.carried[:] = 0.0
         self.excited = False
 
     def coefficients(self, beta: float, finger_ratio: float):
@@ -104,7 +120,7 @@ class StringVoice:
             if len(self._cache) >= _CACHE_SIZE:
                 self._cache.clear()
             coeffs = contact_coefficients(self.basis, key[0] * BETA_RESOLUTION,
-                                          key[1] * FINGER_RESOLUTION)
+                                          key[1] * FINGER_RESOLUTION, self.n_torsion)
             hit = (pack_coefficients(self.basis, coeffs), coeffs.gains, coeffs.fingered)
             self._cache[key] = hit
         return hit
@@ -145,7 +161,7 @@ class StringVoice:
         n = bow_velocity.size
         done = 0
         while True:
-            done += advance_string(self.state, self.last_forces, packed, gains,
+            done += advance_string(self.state, self.carried, packed, self.n_bridge, gains,
                                    self.finger_spring, self.friction, fingered,
                                    bow_velocity[done:], bow_force[done:], contact[done:],
                                    self._noise, self._noise_used, out.bridge_force[done:],

@@ -9,16 +9,27 @@ from __future__ import annotations
 import numpy as np
 
 from synth.modal_kernel import CONTACT_GRIP, CONTACT_LIFTED, OFF_STRING, SLIPPING, STICKING
+from synth.torsion import torsion_modes
 
 
 def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocity, bow_force,
-                 contact, rng):
+                 contact, rng, *, n_torsion=0, thermal=None):
     """Return (bridge force, slip velocity, stick-slip state) per sample, like the kernel.
 
     ``rng`` gives one uniform draw of friction noise per slipping sample, in order.
+    ``n_torsion`` torsional modes (on the stopped length, read at the bow) add their surface
+    velocity to the bow point's; ``thermal = (rosin_heat J, cooling time s)`` replaces the
+    hyperbolic curve by rosin friction that falls as the contact heats.
     """
     length = basis.string.length
     effective = length * (1.0 - finger_ratio)
+    tors = torsion_modes(basis.string, effective, beta * effective, basis.sample_rate,
+                         basis.frequency_limit, n_torsion)
+    t_aa, t_av, t_va, t_vv = tors.free
+    a_t = np.zeros(tors.n_modes)
+    v_t = np.zeros(tors.n_modes)
+    heating = 0.0
+    step = 1.0 / basis.sample_rate
     phi_b = basis.shape(beta * effective)
     fingered = finger_ratio > 0
     phi_f = basis.shape(effective) if fingered else np.zeros_like(phi_b)
@@ -33,6 +44,8 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
     for t in range(bow_velocity.size):
         a_free = c_aa * a + c_av * v
         v_free = c_va * a + c_vv * v
+        at_free = t_aa * a_t + t_av * v_t
+        vt_free = t_va * a_t + t_vv * v_t
 
         def end_state(f_bow, f_finger, a_free=a_free, v_free=v_free):
             modal_force = phi_b * f_bow + phi_f * f_finger
@@ -49,8 +62,9 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
             return -(stiffness * y0 + damping * w0) / (
                 1.0 + stiffness * (y1 - y0) + damping * (w1 - w0))
 
-        def bow_point_velocity(f_bow):
-            return phi_b @ end_state(f_bow, finger_force(f_bow))[1]
+        def bow_point_velocity(f_bow, vt_free=vt_free):
+            torsion = tors.shape_bow @ (vt_free + tors.force_to_velocity * tors.shape_bow * f_bow)
+            return phi_b @ end_state(f_bow, finger_force(f_bow))[1] + torsion
 
         v_unforced = bow_point_velocity(0.0)
         admittance = bow_point_velocity(1.0) - v_unforced
@@ -60,8 +74,14 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
         else:
             dv = bow_velocity[t] - v_unforced
             f_stick = dv / admittance
-            if contact[t] == CONTACT_GRIP or abs(f_stick) <= mu_s * bow_force[t]:
+            static = mu_s if thermal is None else mu_d + (mu_s - mu_d) * np.exp(-heating)
+            if contact[t] == CONTACT_GRIP or abs(f_stick) <= static * bow_force[t]:
                 f_bow, state = f_stick, STICKING
+            elif thermal is not None:
+                fb = bow_force[t]
+                mu = mu_d + (static - mu_d) * (1.0 - depth * rng.random())
+                slip = abs(dv) - admittance * fb * mu  # Coulomb at this heating
+                f_bow, state = np.sign(dv) * fb * mu, SLIPPING
             else:
                 v0 = v0_nominal * (1.0 - depth * rng.random())
                 fb = bow_force[t]
@@ -78,6 +98,11 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
                 mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
                 f_bow, state = np.sign(dv) * fb * mu, SLIPPING
         a, v = end_state(f_bow, finger_force(f_bow))
+        a_t = at_free + tors.force_to_displacement * tors.shape_bow * f_bow
+        v_t = vt_free + tors.force_to_velocity * tors.shape_bow * f_bow
+        if thermal is not None:
+            heat, cooling_time = thermal
+            heating = heating * np.exp(-step / cooling_time) + abs(f_bow) * slip * step / heat
         out[0][t] = basis.bridge_gain @ a
         out[1][t] = slip
         out[2][t] = state

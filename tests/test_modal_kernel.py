@@ -4,25 +4,47 @@ import numpy as np
 import pytest
 from naive_modal import naive_string
 
-from synth.modal import contact_coefficients, mode_basis, pack_coefficients
-from synth.modal_kernel import SLIPPING, advance_string, empty_outputs
+from synth.modal import (
+    bridge_mode_count,
+    contact_coefficients,
+    kernel_state,
+    mode_basis,
+    pack_coefficients,
+)
+from synth.modal_kernel import (
+    N_CARRIED,
+    SLIPPING,
+    THERMAL,
+    advance_string,
+    empty_outputs,
+    pack_friction,
+)
 from synth.strings import load_instrument
 
 N = 2000
 
 
-def run_kernel(basis, string, beta, finger_ratio, velocity, force, contact, rng):
-    coeffs = contact_coefficients(basis, beta, finger_ratio)
+def run_kernel(basis, string, beta, finger_ratio, velocity, force, contact, rng, *,
+               n_torsion=0, thermal=None):
+    coeffs = contact_coefficients(basis, beta, finger_ratio, n_torsion)
     packed = pack_coefficients(basis, coeffs)
-    state = np.zeros((2, basis.n_modes))
-    forces = np.zeros(2)
+    state = kernel_state(basis, n_torsion)
+    carried = np.zeros(N_CARRIED)
     out = empty_outputs(velocity.size)
-    friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
+    friction = friction_of(string, thermal, basis.sample_rate)
     spring = np.array([string.finger_stiffness, string.finger_damping])
-    advance_string(state, forces, packed, coeffs.gains, spring, friction, coeffs.fingered,
-                   velocity, force, contact, rng.random(velocity.size), np.zeros(1, np.int64),
-                   *out)
+    advance_string(state, carried, packed, bridge_mode_count(basis), coeffs.gains, spring,
+                   friction, coeffs.fingered, velocity, force, contact,
+                   rng.random(velocity.size), np.zeros(1, np.int64), *out)
     return out
+
+
+def friction_of(string, thermal=None, sample_rate=88200.0):
+    if thermal is None:
+        return pack_friction(string.mu_s, string.mu_d, string.v0, 0.02)
+    return pack_friction(string.mu_s, string.mu_d, string.v0, 0.02, model=THERMAL,
+                         rosin_heat=thermal[0], rosin_cooling_time=thermal[1],
+                         sample_rate=sample_rate)
 
 
 @pytest.mark.parametrize(("string_index", "finger_ratio"), [(1, 0.0), (0, 1 - 2 ** (-7 / 12))])
@@ -63,7 +85,7 @@ def test_kernel_split_into_odd_runs_equals_one_run(finger_ratio):
     basis = mode_basis(string, 88200.0, max_frequency=20000.0)
     coeffs = contact_coefficients(basis, 0.09, finger_ratio)
     packed = pack_coefficients(basis, coeffs)
-    friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
+    friction = friction_of(string)
     spring = np.array([string.finger_stiffness, string.finger_damping])
     velocity = np.linspace(0.05, 0.3, N)
     force = np.full(N, string.reference_force)
@@ -71,10 +93,11 @@ def test_kernel_split_into_odd_runs_equals_one_run(finger_ratio):
     contact[1500:1600] = 0  # a lift inside the run
 
     def run(bounds):
-        state, forces, out = np.zeros((2, basis.n_modes)), np.zeros(2), empty_outputs(N)
+        state, forces, out = kernel_state(basis), np.zeros(N_CARRIED), empty_outputs(N)
         noise, used = np.random.default_rng(5).random(N), np.zeros(1, np.int64)
         for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-            advance_string(state, forces, packed, coeffs.gains, spring, friction,
+            advance_string(state, forces, packed, bridge_mode_count(basis), coeffs.gains,
+                           spring, friction,
                            coeffs.fingered, velocity[lo:hi], force[lo:hi], contact[lo:hi],
                            noise, used, out[0][lo:hi], out[1][lo:hi], out[2][lo:hi])
         return out
@@ -114,18 +137,19 @@ def test_kernel_stops_when_its_friction_noise_is_used_up_and_resumes_exactly():
     basis = mode_basis(string, 88200.0, max_frequency=20000.0)
     coeffs = contact_coefficients(basis, 0.1, 0.0)
     packed = pack_coefficients(basis, coeffs)
-    friction = np.array([string.mu_s, string.mu_d, string.v0, 0.02])
+    friction = friction_of(string)
     spring = np.array([string.finger_stiffness, string.finger_damping])
     velocity, force = np.full(N, 0.3), np.full(N, string.reference_force)
     contact = np.ones(N, np.int8)
     draws = np.random.default_rng(2).random(N)
 
     def run(noise_blocks):
-        state, forces, out = np.zeros((2, basis.n_modes)), np.zeros(2), empty_outputs(N)
+        state, forces, out = kernel_state(basis), np.zeros(N_CARRIED), empty_outputs(N)
         done, calls = 0, 0
         for noise in noise_blocks:
             used = np.zeros(1, np.int64)
-            done += advance_string(state, forces, packed, coeffs.gains, spring, friction,
+            done += advance_string(state, forces, packed, bridge_mode_count(basis),
+                                   coeffs.gains, spring, friction,
                                    False, velocity[done:], force[done:], contact[done:], noise,
                                    used, *(o[done:] for o in out))
             calls += 1
