@@ -279,7 +279,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
                     config: dict[str, Any] | None = None, seed: int = 0,
                     sample_rate: int = 44100, transpose_octaves: bool = False,
                     audio: bool = True, diagnostics: bool = False,
-                    progress: bool | None = None) -> RenderResult:
+                    progress: bool | None = None, engine: str = "modal") -> RenderResult:
     """Play the chosen parts with gestures sampled from a database.
 
     Parameters
@@ -310,6 +310,8 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
         Keep the instrument's contact diagnostics per part (for the evaluation).
     progress : bool, optional
         Progress bar (default: when stderr is a terminal).
+    engine : str
+        Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
 
     Returns
     -------
@@ -347,7 +349,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
                                targets=targets, choices=choices, feedback=closed)
         if audio and closed:
             y, played, diag = correct_force(perf, models, instrument=name,
-                                            sample_rate=sample_rate, seed=seed)
+                                            sample_rate=sample_rate, seed=seed, engine=engine)
             rendered.audio = y
             rendered.extras["sampled_actions"] = perf.actions
             rendered.performance = Performance(played, perf.events, perf.warnings)
@@ -355,7 +357,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
         elif audio:
             from synth import render_with_diagnostics
 
-            y, diag = render_with_diagnostics(perf.actions, instrument=name,
+            y, diag = render_with_diagnostics(perf.actions, instrument=name, engine=engine,
                                               sample_rate=sample_rate, seed=seed,
                                               diagnostics=diagnostics)
             rendered.audio = np.asarray(y, np.float32)
@@ -414,7 +416,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
                              "48000 Hz")
     if not Path(models_dir).is_dir():
         raise ParameterError(f"--models {models_dir}: no such directory (train models with "
-                             "arco train, or play open loop with --no-feedback)")
+                             "arco train, or play open loop with --method sampling-open)")
     plan, span = hop_plan(perf, load_config(), instrument, sample_rate=sample_rate)
     models = load_models(models_dir, instrument)
     n, n_strings = plan.bowed.shape
