@@ -1,7 +1,7 @@
 """Acceptance: a two-octave scale under feedback control sounds right (issue 4, item 7)."""
 
 import pytest
-from _listening import MF_PAIRS, mf_models_dir, models_dir  # noqa: F401
+from _listening import MF_PAIRS
 
 from pipelines.listening.evaluate import evaluate
 from pipelines.methods.feedback import render_feedback, scale_notes
@@ -20,7 +20,7 @@ def scale():
 
 
 @pytest.fixture(scope="module")
-def feedback_share(mf_models_dir, scale):  # noqa: F811
+def feedback_share(mf_models_dir, scale):
     audio, actions, diagnostics, _ = render_feedback(scale, CFG, models_dir=mf_models_dir,
                                                      instrument="violin", seed=0)
     piece = evaluate(audio, actions, diagnostics=diagnostics)["piece"]
@@ -41,7 +41,7 @@ def test_scale_under_feedback_beats_wrong_fixed_forces(feedback_share, scale, fo
     assert feedback_share > theirs + 0.5, (force, feedback_share, theirs)
 
 
-def test_cv_accuracy_by_clip_of_every_mf_pair_reaches_the_target(mf_models_dir):  # noqa: F811
+def test_cv_accuracy_by_clip_of_every_mf_pair_reaches_the_target(mf_models_dir):
     accuracy = {s: load_pair(mf_models_dir, "violin", s, d).metadata["cv_accuracy"]
                 for s, d in MF_PAIRS}
     assert min(accuracy.values()) >= 0.95, accuracy

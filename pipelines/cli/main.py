@@ -50,7 +50,8 @@ class _Version(argparse.Action):
             number = version("arco")
         except PackageNotFoundError:  # pragma: no cover - running from an uninstalled tree
             number = "unknown (not installed)"
-        parser.exit(message=f"arco {number}\n")
+        print(f"arco {number}")
+        parser.exit()
 
 
 def build_parser() -> argparse.ArgumentParser:

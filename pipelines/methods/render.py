@@ -48,11 +48,10 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
     transpose_octaves : bool
         Fold notes outside the instrument's range by octaves.
     config : path-like or dict, optional
-        Rules settings: a TOML file merged over the shipped ones, or a loaded configuration.
-    db : path-like or SamplingDatabase, optional
-        Gesture database (``arco build-db``) for the sampling methods.
-    models : path-like, optional
-        Listening models (``arco train``) for feedback and sampling.
+        Rules settings: a TOML merged over the shipped ones, or a loaded configuration.
+    db, models : path-like, optional
+        Gesture database (``arco build-db``; or a ``SamplingDatabase``) and listening
+        models (``arco train``), for the methods that need them.
     search_config : path-like, optional
         Sample-search settings merged over the shipped ones (when ``db`` is a path).
     diagnostics : bool
@@ -66,36 +65,22 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
         ``audio`` (float32, mono, the parts mixed) and per part its actions, note events,
         diagnostics and warnings (``parts``).
 
-    Raises
-    ------
-    ParameterError, ScoreError, SchemaError
-        Bad settings, an unreadable score, a missing database (one-line messages).
-
     Examples
     --------
-    >>> from pipelines import bundled_score, render_score
-    >>> out = render_score(bundled_score(), end_measure=1, seed=0)
+    A notes table (here a one-octave D major scale, one second a note) on the rules:
+
+    >>> from pipelines.methods.feedback import scale_notes
+    >>> out = render_score(scale_notes(tonic=62, octaves=1), method="rules", seed=0)
     >>> out.method, out.parts[0].instrument, out.audio.dtype
     ('rules', 'violin', dtype('float32'))
-    >>> 3.0 < out.audio.size / 44100 < 4.0
-    True
+    >>> len(out.parts[0].events), round(out.audio.size / 44100, 1)  # 8 notes + ring-out, s
+    (8, 9.0)
     """
     from pipelines.perform.config import load_config
-    from pipelines.score import read_score
-    from pipelines.score.select import choose_parts, select_measures
 
     chosen = get_method(method)
     check_methods([method], db=db, models=models, option="--method")
-    if isinstance(score, str | os.PathLike):
-        stem, notes = Path(score).stem, read_score(score)
-    else:
-        stem, notes = _stem_of(score), score
-    notes = select_measures(notes, start_measure, end_measure)
-    if isinstance(parts, list):
-        indices = [int(p) for p in parts]
-    else:
-        indices = choose_parts(notes, None if parts in (None, "all") else str(parts),
-                               parts == "all")
+    stem, notes, indices = _select(score, parts, start_measure, end_measure)
     database = None
     if chosen.needs_db:
         from pipelines.methods.sampling import SamplingDatabase, open_database
@@ -108,6 +93,23 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
                          instrument=instrument, skill=skill,
                          transpose_octaves=transpose_octaves, diagnostics=diagnostics,
                          progress=progress, engine=engine)
+
+
+def _select(score, parts, start: int | None, end: int | None,
+            ) -> tuple[str, pd.DataFrame, list[int]]:
+    """The piece's name, its notes in the measures asked for, and the part indices."""
+    from pipelines.score import read_score
+    from pipelines.score.select import choose_parts, select_measures
+
+    if isinstance(score, str | os.PathLike):
+        stem, notes = Path(score).stem, read_score(score)
+    else:
+        stem, notes = _stem_of(score), score
+    notes = select_measures(notes, start, end)
+    if isinstance(parts, list):
+        return stem, notes, [int(p) for p in parts]
+    one = None if parts in (None, "all") else str(parts)
+    return stem, notes, choose_parts(notes, one, parts == "all")
 
 
 def _stem_of(notes: pd.DataFrame) -> str:

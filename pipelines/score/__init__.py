@@ -4,10 +4,11 @@ Names load on first use (PEP 562, :mod:`data_schemas.lazy`).
 
 Examples
 --------
->>> from pipelines.score import bundled_score, read_score
->>> notes = read_score(bundled_score())
->>> sorted(notes["instrument"].unique())
-['cello', 'viola', 'violin']
+>>> from pipelines.score import READERS, bundled_score
+>>> sorted(READERS)
+['.mid', '.midi', '.musicxml', '.mxl', '.xml']
+>>> bundled_score().name  # read it with read_score (about 4 s: 8109 notes)
+'mozart-k421.mxl'
 """
 
 from __future__ import annotations
