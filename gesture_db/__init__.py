@@ -2,8 +2,8 @@
 
 Build a database from recordings (:func:`build_database`), open it (:class:`GestureDB`),
 summarise it (:func:`summarize`) and search it for the gestures of a sequence of target notes
-(:class:`SearchIndex`, :func:`search`). Names load on first use (PEP 562,
-:mod:`data_schemas.lazy`).
+(:class:`SearchIndex` and :func:`gesture_db.search.search`: the function is not re-exported,
+its name is its module's). Names load on first use (PEP 562, :mod:`data_schemas.lazy`).
 
 Examples
 --------
@@ -37,14 +37,13 @@ if TYPE_CHECKING:  # pragma: no cover - where each name lives (read by lazy_expo
         SearchIndex,
         SearchResult,
         load_search_config,
-        search,
     )
     from gesture_db.simulate import simulate_recordings
     from gesture_db.store import GestureDB
 
 __all__ = ["BuildParams", "ContourSource", "EmptyGroupsError", "GestureDB", "SearchIndex",
            "SearchResult", "build_database", "fit_predictors", "format_summary",
-           "load_or_fit_predictors", "load_search_config", "render_samples", "search",
+           "load_or_fit_predictors", "load_search_config", "render_samples",
            "simulate_recordings", "summarize"]
 
 __getattr__, __dir__ = lazy_exports(__name__, __file__)
