@@ -280,7 +280,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
                     config: dict[str, Any] | None = None, seed: int = 0,
                     sample_rate: int = 44100, transpose_octaves: bool = False,
                     audio: bool = True, diagnostics: bool = False,
-                    progress: bool | None = None) -> RenderResult:
+                    progress: bool | None = None, engine: str = "modal") -> RenderResult:
     """Play the chosen parts with gestures sampled from a database.
 
     Parameters
@@ -311,6 +311,8 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
         Keep the instrument's contact diagnostics per part (for the evaluation).
     progress : bool, optional
         Progress bar (default: when stderr is a terminal).
+    engine : str
+        Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
 
     Returns
     -------
@@ -343,7 +345,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
                                  transpose_octaves=transpose_octaves)
         if audio:
             _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,
-                  diagnostics=diagnostics)
+                  diagnostics=diagnostics, engine=engine)
         result.parts.append(rendered)
     if audio:
         result.audio = mix([p.audio for p in result.parts])
@@ -371,7 +373,7 @@ def _sampled_part(part: pd.DataFrame, index: int, database: SamplingDatabase,
 
 
 def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: int, seed: int,
-          diagnostics: bool) -> None:
+          diagnostics: bool, engine: str = "modal") -> None:
     """Synthesize a sampled part in place: open loop, or with ``models`` correcting the force.
 
     Closed loop, the part's performance becomes what was played (the sampled actions are
@@ -380,7 +382,7 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
     perf = part.performance
     if models is not None:
         y, played, diag = correct_force(perf, models, instrument=part.instrument,
-                                        sample_rate=sample_rate, seed=seed)
+                                        sample_rate=sample_rate, seed=seed, engine=engine)
         part.audio = y
         part.extras["sampled_actions"] = perf.actions
         part.performance = Performance(played, perf.events, perf.warnings)
@@ -388,7 +390,7 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
         return
     from synth import render_with_diagnostics
 
-    y, diag = render_with_diagnostics(perf.actions, instrument=part.instrument,
+    y, diag = render_with_diagnostics(perf.actions, instrument=part.instrument, engine=engine,
                                       sample_rate=sample_rate, seed=seed,
                                       diagnostics=diagnostics)
     part.audio = np.asarray(y, np.float32)
@@ -443,7 +445,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
                              "48000 Hz")
     if not Path(models_dir).is_dir():
         raise ParameterError(f"--models {models_dir}: no such directory (train models with "
-                             "arco train, or play open loop with --no-feedback)")
+                             "arco train, or play open loop with --method sampling-open)")
     plan, span = hop_plan(perf, load_config(), instrument, sample_rate=sample_rate)
     models = load_models(models_dir, instrument)
     n, n_strings = plan.bowed.shape
