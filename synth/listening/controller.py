@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from data_schemas.instruments import finger_ratio
 from synth.controls import BowControl
 from synth.engines import Engine
 from synth.listening.classifier import PairModel
@@ -300,7 +301,7 @@ def perform(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrument:
                 v *= 1.0 + jitter * noise[draw]
                 draw += 1
             v = min(max(v, -5.0), 5.0)
-            ratio = 1.0 - 2.0 ** (-semitones[i] / 12.0)
+            ratio = float(finger_ratio(semitones[i]))
             force = ctl.force if planned is None else min(max(planned[i] * ctl.force, 0.0),
                                                           MAX_FORCE)
             controls[s] = BowControl(v, force, beta[i], min(ratio, 0.8))
