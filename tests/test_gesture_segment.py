@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
+from gesture_db.playing import play_script
+from gesture_db.script import recording_script
 from gesture_db.segment import (
     _viterbi_kernel,
     detect_notes,
     refine_boundaries,
     score_segmentation,
 )
-from gesture_db.playing import play_script
-from gesture_db.script import recording_script
 from gesture_db.simulate_config import PERFORMERS
 
 
