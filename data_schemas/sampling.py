@@ -17,13 +17,14 @@ from __future__ import annotations
 import pandas as pd
 import pyarrow as pa
 
+from data_schemas.annotation import TECHNIQUES
 from data_schemas.io import to_arrow
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
 SAMPLING_VERSION = "1.0"
 
-#: Bowing techniques a target may ask for (those of the gesture database).
-TARGET_TECHNIQUES = ("detache", "legato", "staccato", "spiccato", "martele")
+#: Bowing techniques a target may ask for (those of the gesture database's annotations).
+TARGET_TECHNIQUES = TECHNIQUES
 
 SAMPLING_TARGETS = TableSpec(
     name="sampling_targets",

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from data_schemas.annotation import TECHNIQUES
 from data_schemas.instruments import finger_ratio, instrument_facts
-from data_schemas.sampling import TARGET_TECHNIQUES
 from gesture_db.simulate_config import simulator_config
 
 #: The simulated performer's instrument.
@@ -48,7 +48,7 @@ def recording_script(n_notes: int, rng: np.random.Generator) -> pd.DataFrame:
     """
     cfg = simulator_config()["script"]
     n_strings = instrument_facts(INSTRUMENT).n_strings
-    combos = [(t, d, s) for t in TARGET_TECHNIQUES for d in cfg["dynamics"]
+    combos = [(t, d, s) for t in TECHNIQUES for d in cfg["dynamics"]
               for s in range(n_strings)]
     rows: list[dict] = []
     state = {"time": cfg["start"], "exercise": 0, "run": 0}
