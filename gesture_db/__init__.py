@@ -28,10 +28,10 @@ from typing import TYPE_CHECKING
 from data_schemas.lazy import lazy_exports
 
 if TYPE_CHECKING:  # pragma: no cover - where each name lives (read by lazy_exports)
+    from gesture_db.assemble import ContourSource, assemble_actions
     from gesture_db.build import BuildParams, build_database
     from gesture_db.info import format_summary, summarize
     from gesture_db.predict import fit_predictors, load_or_fit_predictors
-    from gesture_db.render import ContourSource, render_samples
     from gesture_db.search import (
         EmptyGroupsError,
         SearchIndex,
@@ -43,7 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover - where each name lives (read by lazy_expo
 
 __all__ = ["BuildParams", "ContourSource", "EmptyGroupsError", "GestureDB", "SearchIndex",
            "SearchResult", "build_database", "fit_predictors", "format_summary",
-           "load_or_fit_predictors", "load_search_config", "render_samples",
+           "load_or_fit_predictors", "load_search_config", "assemble_actions",
            "simulate_recordings", "summarize"]
 
 __getattr__, __dir__ = lazy_exports(__name__, __file__)

@@ -27,6 +27,7 @@ import pandas as pd
 
 from data_schemas.actions import ACTIONS
 from data_schemas.errors import ParameterError
+from data_schemas.instruments import finger_ratio, instrument_facts, limits
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
 from pipelines.methods.result import PartRender, RenderResult, mix
@@ -34,8 +35,8 @@ from pipelines.perform.events import Event, Performance
 from pipelines.perform.rules import fermata_warp
 from pipelines.score.select import choose_parts
 
-#: Violin open-string length (m): effective string lengths are violin-equivalent.
-VIOLIN_STRING_LENGTH = 0.325
+#: Effective string lengths of targets are violin-equivalent (the database holds violin takes).
+VIOLIN = instrument_facts("violin")
 #: Staccato notes shorter than this (s) are played spiccato (off the string).
 SPICCATO_BELOW = 0.2
 
@@ -156,12 +157,12 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.Da
     pitch = notes["midi_pitch"].to_numpy()
     top_pitch = np.array([int(pitch[e.rows].max()) for e in bowed])
     semis = np.array([e.semitones[-1] for e in bowed])
-    fr = np.clip(1.0 - 2.0 ** (-semis / 12.0), 0.0, 0.8)
+    fr = np.clip(finger_ratio(semis), 0.0, limits().max_finger_ratio)
     direction = np.where(np.array([e.direction for e in bowed]) < 0, "up", "down")
     frame = pd.DataFrame({
         "onset": t0, "duration": np.maximum(duration, 1e-3), "midi_pitch": top_pitch,
         "string": [e.strings[-1] for e in bowed], "finger_ratio": fr,
-        "effective_string_length": VIOLIN_STRING_LENGTH * (1.0 - fr),
+        "effective_string_length": VIOLIN.effective_length(fr),
         "dynamic": np.clip([e.dynamic for e in bowed], 0.0, 9.0), "technique": tech,
         "bow_direction": direction, "slur_position": slur, "run_position": run})
     frame["group"] = (frame["technique"] + "-" + frame["bow_direction"] + "-"
@@ -185,7 +186,7 @@ def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
         if e.pizz:
             for j, (s, semis) in enumerate(zip(e.strings, e.semitones, strict=True)):
                 t = e.t0 + 0.01 * j
-                fr = min(1.0 - 2.0 ** (-semis / 12.0), 0.8)
+                fr = min(float(finger_ratio(semis)), limits().max_finger_ratio)
                 frames.append(pd.DataFrame({
                     "time": [t, max(e.end - 1e-3, t)], "string": s, "finger_ratio": fr,
                     "bow_force": 0.0, "bow_velocity": 0.0, "beta": 0.12, "bow_position": 0.5,
@@ -198,7 +199,7 @@ def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
             if rows.empty:
                 continue
             rows["string"] = s
-            rows["finger_ratio"] = min(1.0 - 2.0 ** (-semis / 12.0), 0.8)
+            rows["finger_ratio"] = min(float(finger_ratio(semis)), limits().max_finger_ratio)
             lift = rows.iloc[[0, -1]].copy()
             lift["time"] = [max(float(rows["time"].iloc[0]) - 1e-3, 0.0),
                             float(rows["time"].iloc[-1]) + 1e-3]

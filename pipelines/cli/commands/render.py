@@ -118,9 +118,9 @@ def run(args: argparse.Namespace) -> int:
 def _write(args: argparse.Namespace, output, variant: str, say) -> None:
     from data_schemas.actions import write_actions
     from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
+    from data_schemas.instruments import instrument_facts
     from data_schemas.io import write_table
     from pipelines.audio_io import write_audio
-    from pipelines.perform.instruments import get_instrument
     from pipelines.reports.plots import plot_bowing
 
     if args.output:
@@ -139,7 +139,7 @@ def _write(args: argparse.Namespace, output, variant: str, say) -> None:
         write_table(first.diagnostics, args.diagnostics, CONTACT_DIAGNOSTICS)
         say(f"wrote {args.diagnostics}")
     if args.plot:
-        names = get_instrument(first.instrument).string_names
+        names = instrument_facts(first.instrument).string_names
         plot_bowing(first.actions, first.events, args.plot,
                     title=f"{Path(args.score).name}: {first.part_name} ({first.instrument}), "
                           f"{variant}, skill {args.skill}", string_names=names)
