@@ -20,10 +20,12 @@ import tomllib
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from data_schemas.errors import ParameterError, SchemaError
+
+if TYPE_CHECKING:  # numpy is imported on use: the CLI reads these facts to print --help
+    import numpy as np
 
 INSTRUMENT_NAMES = ("violin", "viola", "cello")
 
@@ -80,10 +82,12 @@ class InstrumentFacts:
 
     def effective_length(self, finger_ratio: float | np.ndarray) -> np.ndarray:
         """Vibrating length from finger to bridge (m): ``scale_length * (1 - finger_ratio)``."""
+        import numpy as np
         return self.scale_length * (1.0 - np.asarray(finger_ratio, dtype=np.float64))
 
     def open_pitch(self, string: int | np.ndarray) -> np.ndarray:
         """MIDI pitch of the open ``string`` (0 = lowest)."""
+        import numpy as np
         return np.asarray(self.open_strings)[np.asarray(string)]
 
 
@@ -133,6 +137,7 @@ class DynamicsTable:
 
     def at(self, dynamic: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Velocity (m/s), force and beta at dynamic levels ``dynamic`` (linear in level)."""
+        import numpy as np
         d = np.asarray(dynamic, dtype=float)
         level = np.asarray(self.level)
         return (np.interp(d, level, np.asarray(self.velocity)),
@@ -141,6 +146,7 @@ class DynamicsTable:
 
     def level_of_force(self, force: float | np.ndarray) -> np.ndarray:
         """Inverse of the force column: the dynamic level a force is typical of."""
+        import numpy as np
         return np.interp(force, np.asarray(self.force), np.asarray(self.level))
 
 
@@ -274,9 +280,11 @@ def finger_ratio(semitones: float | np.ndarray) -> np.ndarray:
 
     Examples
     --------
+    >>> import numpy as np
     >>> finger_ratio(np.array([0.0, 12.0, 24.0])).tolist()
     [0.0, 0.5, 0.75]
     """
+    import numpy as np
     return 1.0 - 2.0 ** (-np.asarray(semitones, dtype=np.float64) / 12.0)
 
 
@@ -285,9 +293,11 @@ def semitones_of(ratio: float | np.ndarray) -> np.ndarray:
 
     Examples
     --------
+    >>> import numpy as np
     >>> (semitones_of(np.array([0.0, 0.5])) + 0.0).tolist()
     [0.0, 12.0]
     """
+    import numpy as np
     return -12.0 * np.log2(1.0 - np.asarray(ratio, dtype=np.float64))
 
 
