@@ -28,6 +28,7 @@ lint: $(STAMP)
 # Every benchmark prints one JSON object; the listening models trained by feedback_speed
 # are reused by sampling_speed (out/bench-models).
 bench: $(STAMP) stk
+	$(BIN)/python bench/cli_speed.py --json
 	$(BIN)/python bench/synth_speed.py --json
 	$(BIN)/python bench/score_speed.py --json
 	$(BIN)/python bench/build_db.py --json

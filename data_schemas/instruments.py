@@ -20,10 +20,12 @@ import tomllib
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from data_schemas.errors import ParameterError, SchemaError
+
+if TYPE_CHECKING:  # numpy is imported on use: the CLI reads these facts to print --help
+    import numpy as np
 
 INSTRUMENT_NAMES = ("violin", "viola", "cello")
 
@@ -68,6 +70,26 @@ class InstrumentFacts:
         """Number of strings."""
         return len(self.open_strings)
 
+    @property
+    def scale_length(self) -> float:
+        """Speaking length of the instrument (m): its lowest string's, shared by all strings.
+
+        The gesture database and gesture sampling measure a stopped note by its effective
+        length ``scale_length * (1 - finger_ratio)``; the instrument model plays the
+        per-string :attr:`string_lengths`.
+        """
+        return self.string_lengths[0]
+
+    def effective_length(self, finger_ratio: float | np.ndarray) -> np.ndarray:
+        """Vibrating length from finger to bridge (m): ``scale_length * (1 - finger_ratio)``."""
+        import numpy as np
+        return self.scale_length * (1.0 - np.asarray(finger_ratio, dtype=np.float64))
+
+    def open_pitch(self, string: int | np.ndarray) -> np.ndarray:
+        """MIDI pitch of the open ``string`` (0 = lowest)."""
+        import numpy as np
+        return np.asarray(self.open_strings)[np.asarray(string)]
+
 
 @dataclass(frozen=True)
 class Limits:
@@ -81,11 +103,51 @@ class Limits:
         Largest fraction of a string the finger may stop off.
     max_bow_acceleration : float, m/s^2
         Largest change of bow velocity per second.
+    bow_margin : float
+        Share of the bow hair a run of strokes keeps free at the frog and at the tip.
     """
 
     tuning_a4: float
     max_finger_ratio: float
     max_bow_acceleration: float
+    bow_margin: float
+
+
+@dataclass(frozen=True)
+class DynamicsTable:
+    """Typical bowing per dynamic level (0 = pppp, 5 = mf, 9 = ffff), interpolated between.
+
+    Attributes
+    ----------
+    name : str
+        ``bow_lanes`` (the rules') or ``violinist`` (the simulated performer's).
+    level : tuple of float
+        Dynamic levels of the rows, increasing.
+    velocity : tuple of float, m/s
+    force : tuple of float
+        N (``violinist``) or multiples of each string's reference force (``bow_lanes``).
+    beta : tuple of float
+    """
+
+    name: str
+    level: tuple[float, ...]
+    velocity: tuple[float, ...]
+    force: tuple[float, ...]
+    beta: tuple[float, ...]
+
+    def at(self, dynamic: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Velocity (m/s), force and beta at dynamic levels ``dynamic`` (linear in level)."""
+        import numpy as np
+        d = np.asarray(dynamic, dtype=float)
+        level = np.asarray(self.level)
+        return (np.interp(d, level, np.asarray(self.velocity)),
+                np.interp(d, level, np.asarray(self.force)),
+                np.interp(d, level, np.asarray(self.beta)))
+
+    def level_of_force(self, force: float | np.ndarray) -> np.ndarray:
+        """Inverse of the force column: the dynamic level a force is typical of."""
+        import numpy as np
+        return np.interp(force, np.asarray(self.force), np.asarray(self.level))
 
 
 def _path() -> str:
@@ -115,8 +177,24 @@ def _instrument(entry: dict, where: str) -> InstrumentFacts:
     return facts
 
 
+def _dynamics(name: str, entry: dict) -> DynamicsTable:
+    where = f"dynamics.{name}"
+    try:
+        columns = {k: tuple(_positive(x, f"{where}.{k}") for x in entry[k])
+                   for k in ("velocity", "force", "beta")}
+    except KeyError as exc:
+        raise SchemaError(f"{_path()}: {where} has no {exc.args[0]!r}") from None
+    n = len(columns["beta"])
+    level = tuple(float(x) for x in entry.get("level", range(n)))
+    if any(len(c) != len(level) for c in columns.values()) or \
+            list(level) != sorted(set(level)) or max(columns["beta"]) >= 0.5:
+        raise SchemaError(f"{_path()}: {where}: level, velocity, force and beta must have one "
+                          "entry per level, levels increasing, beta < 0.5")
+    return DynamicsTable(name, level, **columns)
+
+
 @cache
-def _load() -> tuple[dict[str, InstrumentFacts], Limits]:
+def _load() -> tuple[dict[str, InstrumentFacts], Limits, dict[str, DynamicsTable]]:
     with open(_path(), "rb") as fh:
         data = tomllib.load(fh)
     table = {}
@@ -125,8 +203,11 @@ def _load() -> tuple[dict[str, InstrumentFacts], Limits]:
         table[facts.name] = facts
     lim = data.get("limits", {})
     limits = Limits(*(_positive(lim.get(k), f"limits.{k}") for k in
-                      ("tuning_a4", "max_finger_ratio", "max_bow_acceleration")))
-    return table, limits
+                      ("tuning_a4", "max_finger_ratio", "max_bow_acceleration", "bow_margin")))
+    if not limits.bow_margin < 0.5:
+        raise SchemaError(f"{_path()}: limits.bow_margin = {limits.bow_margin} must be < 0.5")
+    dynamics = {k: _dynamics(k, v) for k, v in data.get("dynamics", {}).items()}
+    return table, limits, dynamics
 
 
 def instrument_facts(name: str) -> InstrumentFacts:
@@ -150,7 +231,7 @@ def instrument_facts(name: str) -> InstrumentFacts:
     >>> instrument_facts("viola").string_names
     ('C', 'G', 'D', 'A')
     """
-    table, _ = _load()
+    table = _load()[0]
     try:
         return table[name]
     except KeyError:
@@ -168,6 +249,22 @@ def limits() -> Limits:
     return _load()[1]
 
 
+def dynamics_table(name: str) -> DynamicsTable:
+    """Return the dynamics table ``name`` (``bow_lanes`` or ``violinist``).
+
+    Examples
+    --------
+    >>> velocity, force, beta = dynamics_table("violinist").at(5.0)
+    >>> float(velocity), float(force), float(beta)
+    (0.3, 0.6, 0.1)
+    """
+    tables = _load()[2]
+    try:
+        return tables[name]
+    except KeyError:
+        raise ParameterError(f"dynamics table {name!r} is not one of {sorted(tables)}") from None
+
+
 def finger_ratio(semitones: float | np.ndarray) -> np.ndarray:
     """Fraction of the string length removed by a finger ``semitones`` above the open string.
 
@@ -183,9 +280,11 @@ def finger_ratio(semitones: float | np.ndarray) -> np.ndarray:
 
     Examples
     --------
+    >>> import numpy as np
     >>> finger_ratio(np.array([0.0, 12.0, 24.0])).tolist()
     [0.0, 0.5, 0.75]
     """
+    import numpy as np
     return 1.0 - 2.0 ** (-np.asarray(semitones, dtype=np.float64) / 12.0)
 
 
@@ -194,11 +293,13 @@ def semitones_of(ratio: float | np.ndarray) -> np.ndarray:
 
     Examples
     --------
+    >>> import numpy as np
     >>> (semitones_of(np.array([0.0, 0.5])) + 0.0).tolist()
     [0.0, 12.0]
     """
+    import numpy as np
     return -12.0 * np.log2(1.0 - np.asarray(ratio, dtype=np.float64))
 
 
-__all__ = ["INSTRUMENT_NAMES", "InstrumentFacts", "Limits", "finger_ratio", "instrument_facts",
-           "limits", "semitones_of"]
+__all__ = ["INSTRUMENT_NAMES", "DynamicsTable", "InstrumentFacts", "Limits", "dynamics_table",
+           "finger_ratio", "instrument_facts", "limits", "semitones_of"]

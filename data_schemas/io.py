@@ -29,8 +29,14 @@ def atomic_path(path: str | os.PathLike):
 
     Examples
     --------
-    >>> with atomic_path("out.bin") as tmp:  # doctest: +SKIP
-    ...     Path(tmp).write_bytes(b"...")
+    >>> import tempfile
+    >>> target = Path(tempfile.mkdtemp()) / "out.bin"
+    >>> with atomic_path(target) as tmp:
+    ...     _ = Path(tmp).write_bytes(b"...")
+    ...     target.exists()
+    False
+    >>> target.read_bytes()
+    b'...'
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

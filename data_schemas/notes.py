@@ -23,6 +23,7 @@ import pandas as pd
 import pyarrow as pa
 
 from data_schemas.errors import SchemaError
+from data_schemas.instruments import INSTRUMENT_NAMES
 from data_schemas.io import read_table, to_arrow, write_table
 from data_schemas.spec import Column, TableSpec
 
@@ -30,8 +31,8 @@ NOTES_VERSION = "1.0"
 
 #: Positions of a note in a slur or in a run of notes without rests.
 POSITIONS = ("init", "mid", "end", "iso")
-#: Instruments Arco plays.
-INSTRUMENTS = ("violin", "viola", "cello")
+#: Instruments Arco plays (the instrument facts' names).
+INSTRUMENTS = INSTRUMENT_NAMES
 #: Playing techniques in effect at a note (null = ordinary arco).
 TECHNIQUES = ("pizz", "col_legno", "sul_ponticello", "sul_tasto")
 #: Bow-region words, from frog to tip.

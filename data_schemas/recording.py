@@ -4,17 +4,22 @@ One row is one motion-capture frame of one take (``recording_id``). Recordings c
 simulated performer (:mod:`gesture_db.simulate`), from importers of real motion-capture
 exports, or from the actions table of any render. Frames are sampled at a constant rate of
 200-240 Hz (like motion-capture systems); the rate is written in the file metadata under
-``frame_rate_hz`` and the default is :data:`RECORDING_FRAME_RATE`.
+``frame_rate_hz`` and the default is :data:`RECORDING_FRAME_RATE`. The instrument played is
+the file metadata ``instrument`` (:func:`recording_instrument`); a file without it holds
+violin takes (the simulated performer is a violinist).
 """
 
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
 import pyarrow as pa
 
+from data_schemas.errors import SchemaError
+from data_schemas.instruments import INSTRUMENT_NAMES
 from data_schemas.io import read_frame, to_arrow, write_table
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
@@ -23,8 +28,8 @@ RECORDING_VERSION = "1.0"
 #: Default frame rate of recordings (Hz); any constant rate of 200-240 Hz is accepted.
 RECORDING_FRAME_RATE = 240.0
 
-#: Violin bow hair length (m) used to turn bow position into a distance.
-BOW_LENGTH = 0.65
+#: Instrument of a recording whose file names none.
+DEFAULT_INSTRUMENT = "violin"
 
 RECORDING = TableSpec(
     name="recording",
@@ -76,9 +81,46 @@ def validate_recording(recording: pd.DataFrame | pa.Table,
     return RECORDING.conform(to_arrow(recording), source=source).to_pandas()
 
 
-def write_recording(recording: pd.DataFrame | pa.Table, path: str | os.PathLike) -> Path:
-    """Validate and write a recording (``.parquet`` or ``.csv``) atomically."""
-    return write_table(recording, path, RECORDING)
+def write_recording(recording: pd.DataFrame | pa.Table, path: str | os.PathLike, *,
+                    instrument: str | None = None) -> Path:
+    """Validate and write a recording (``.parquet`` or ``.csv``) atomically.
+
+    Parameters
+    ----------
+    recording : pandas.DataFrame or pyarrow.Table
+    path : path-like
+    instrument : {"violin", "viola", "cello"}, optional
+        Written to the Parquet metadata (a CSV file cannot carry it: use a mapping TOML's
+        ``[source] instrument``). None writes no key (violin).
+    """
+    spec = RECORDING
+    if instrument is not None:
+        check_instrument(instrument, str(path))
+        spec = replace(RECORDING, extra_metadata={**RECORDING.extra_metadata,
+                                                  "instrument": instrument})
+    return write_table(recording, path, spec)
+
+
+def check_instrument(name: object, source: str) -> str:
+    """Return ``name`` if it is an instrument of the violin family, else raise SchemaError."""
+    if name not in INSTRUMENT_NAMES:
+        raise SchemaError(f"instrument {name!r} is not one of {list(INSTRUMENT_NAMES)}",
+                          source=source, column="instrument")
+    return str(name)
+
+
+def recording_instrument(metadata: dict[bytes, bytes] | None, source: str = "<recording>") -> str:
+    """The instrument named by a recording file's schema metadata (default violin).
+
+    Parameters
+    ----------
+    metadata : dict of bytes to bytes, or None
+        ``pyarrow.Schema.metadata`` of the file.
+    source : str
+        Name used in error messages.
+    """
+    raw = (metadata or {}).get(b"instrument")
+    return DEFAULT_INSTRUMENT if raw is None else check_instrument(raw.decode(), source)
 
 
 def read_recording(path: str | os.PathLike) -> pd.DataFrame:
@@ -100,5 +142,6 @@ def frame_rate(recording: pd.DataFrame) -> float:
     return float(1.0 / pd.Series(t).diff().median())
 
 
-__all__ = ["BOW_LENGTH", "RECORDING", "RECORDING_FRAME_RATE", "RECORDING_VERSION",
-           "frame_rate", "read_recording", "validate_recording", "write_recording"]
+__all__ = ["DEFAULT_INSTRUMENT", "RECORDING", "RECORDING_FRAME_RATE", "RECORDING_VERSION",
+           "check_instrument", "frame_rate", "read_recording", "recording_instrument",
+           "validate_recording", "write_recording"]

@@ -7,7 +7,8 @@
   costs; written by :func:`gesture_db.search.search`, read by
   :func:`gesture_db.assemble.assemble_actions` and the reports.
 
-Effective string lengths are violin-equivalent metres (``0.325 m * (1 - finger_ratio)``):
+Effective string lengths of targets are violin-equivalent metres (the violin's scale length
+times ``1 - finger_ratio``, :meth:`data_schemas.instruments.InstrumentFacts.effective_length`):
 the gesture database holds violin recordings, so viola and cello notes are compared by their
 finger position, not their physical length.
 """
@@ -17,13 +18,14 @@ from __future__ import annotations
 import pandas as pd
 import pyarrow as pa
 
+from data_schemas.annotation import TECHNIQUES
 from data_schemas.io import to_arrow
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
 SAMPLING_VERSION = "1.0"
 
-#: Bowing techniques a target may ask for (those of the gesture database).
-TARGET_TECHNIQUES = ("detache", "legato", "staccato", "spiccato", "martele")
+#: Bowing techniques a target may ask for (those of the gesture database's annotations).
+TARGET_TECHNIQUES = TECHNIQUES
 
 SAMPLING_TARGETS = TableSpec(
     name="sampling_targets",
@@ -40,7 +42,8 @@ SAMPLING_TARGETS = TableSpec(
                "Fraction of the string stopped off, 1 - 2**(-semitones/12).",
                minimum=0.0, maximum=0.8),
         Column("effective_string_length", pa.float64(), "m",
-               "Violin-equivalent vibrating length, 0.325 m * (1 - finger_ratio).",
+               "Violin-equivalent vibrating length, the violin's scale length x "
+               "(1 - finger_ratio).",
                minimum=0.0, exclusive_minimum=True),
         Column("dynamic", pa.float32(), "1", "Dynamic level, 0 = pppp, 5 = mf, 9 = ffff.",
                minimum=0.0, maximum=9.0),

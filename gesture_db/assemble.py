@@ -18,15 +18,16 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.actions import validate_actions
+from data_schemas.bow import BowBudget
 from data_schemas.errors import ParameterError, SchemaError
-from data_schemas.recording import BOW_LENGTH
+from data_schemas.instruments import instrument_facts, limits
 from gesture_db.join import CROSSFADE, Piece, join_run
 from gesture_db.stretch import EDGE, stretch
 
 #: Default control frame rate of assembled actions (Hz), like the recordings.
 FRAME_RATE = 240.0
 #: Distance kept from the frog and the tip (share of the hair).
-MARGIN = 0.04
+MARGIN = limits().bow_margin
 _SIGNALS = ("bow_velocity", "bow_force", "beta")
 _TICK = 1e-3
 
@@ -66,7 +67,8 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
                      contours: ContourSource | Callable[[str, str],
                                                         tuple[np.ndarray, np.ndarray]],
                      *, frame_rate: float = FRAME_RATE, edge: float = EDGE,
-                     crossfade: float = CROSSFADE, bow_length: float = BOW_LENGTH,
+                     crossfade: float = CROSSFADE,
+                     bow_length: float = instrument_facts("violin").bow_length,
                      margin: float = MARGIN) -> pd.DataFrame:
     """Stretch and join the chosen samples into an actions table.
 
@@ -159,18 +161,12 @@ def _grid(t0: float, t1: float, frame_rate: float) -> np.ndarray:
 def _bow_positions(t: np.ndarray, v: np.ndarray, direction: int, bow_length: float,
                    margin: float) -> tuple[np.ndarray, float]:
     """Bow positions of one run and the velocity scale that keeps it inside the hair."""
-    dt = np.diff(t)
-    travel = np.r_[0.0, np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)] / bow_length
-    room = 1.0 - 2.0 * margin
-    span = float(travel.max() - travel.min())
-    scale = 1.0
-    if span > room:
-        scale = room / span
-        travel = travel * scale
+    budget = BowBudget(bow_length, margin)
+    fit = budget.fit(budget.travel(np.r_[0.0, np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))]))
     want = margin + 0.06 if direction > 0 else 1.0 - margin - 0.06
-    lo, hi = margin - travel.min(), 1.0 - margin - travel.max()
+    lo, hi = fit.start_window
     start = float(np.clip(want, lo, max(lo, hi)))
-    return np.clip(start + travel, 0.0, 1.0), scale
+    return np.clip(start + fit.travel, 0.0, 1.0), fit.scale
 
 
 def _rows(t, string, finger, sig, pos) -> pd.DataFrame:

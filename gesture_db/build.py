@@ -33,7 +33,7 @@ from data_schemas.io import write_table
 from gesture_db.extract import extract_take
 from gesture_db.features import fit_group_model
 from gesture_db.groups import grammar_for
-from gesture_db.importers import Source, load_source, resolve_sources
+from gesture_db.importers import Source, load_source, resolve_sources, source_instrument
 from gesture_db.store import model_row, read_source, remove_unlisted, write_source
 
 
@@ -65,6 +65,7 @@ def process_source(source: Source, params: BuildParams,
         Per-take statistics merged: recording ids, boundary errors, found counts.
     """
     recording, annotation = load_source(source)
+    instrument = source_instrument(source)
     notes, contours = [], []
     stats: dict = {"path": str(source.path), "recording_ids": [], "onset_errors": [],
                    "offset_errors": [], "found": 0, "n_true": 0, "n_notes": 0}
@@ -73,7 +74,7 @@ def process_source(source: Source, params: BuildParams,
         if annotation is not None:
             ann = annotation[annotation["recording_id"] == rid]
         n, c, s = extract_take(take, ann, source_hash=digest, source_path=str(source.path),
-                               max_candidates=params.max_candidates)
+                               instrument=instrument, max_candidates=params.max_candidates)
         notes.append(n)
         contours.append(c)
         stats["recording_ids"].append(str(rid))

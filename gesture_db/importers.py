@@ -7,6 +7,7 @@ Sources are picked by file name:
       [source]
       path = "take1.csv"          # relative to the TOML file
       recording_id = "take1"
+      instrument = "cello"       # optional: violin (default), viola or cello
       annotation = "take1.annotation.csv"   # optional, an Arco annotation table
       [columns]                  # Arco name = column in the file
       time = "Time (s)"
@@ -25,6 +26,10 @@ Sources are picked by file name:
   --actions`` (recognised by its metadata or its ``pluck`` column): resampled to a 240 Hz
   recording, one string at a time (the most pressed one).
 - A directory: every such file inside it (annotation files excluded).
+
+The instrument of a source's takes (:func:`source_instrument`) is the mapping's ``[source]
+instrument`` or a Parquet recording's metadata ``instrument`` (written by
+``write_recording(..., instrument=...)``); otherwise violin, the simulated performer's.
 """
 
 from __future__ import annotations
@@ -42,7 +47,14 @@ import pyarrow.parquet as pq
 
 from data_schemas.annotation import read_annotation
 from data_schemas.errors import ArcoError, SchemaError
-from data_schemas.recording import RECORDING, RECORDING_FRAME_RATE, validate_recording
+from data_schemas.recording import (
+    DEFAULT_INSTRUMENT,
+    RECORDING,
+    RECORDING_FRAME_RATE,
+    check_instrument,
+    recording_instrument,
+    validate_recording,
+)
 
 _DATA_SUFFIXES = (".parquet", ".pq", ".csv")
 
@@ -132,6 +144,27 @@ def load_source(source: Source) -> tuple[pd.DataFrame, pd.DataFrame | None]:
     recording = load_recording_file(source.path)
     annotation = read_annotation(source.annotation) if source.annotation else None
     return recording, annotation
+
+
+def source_instrument(source: Source) -> str:
+    """The instrument played in a source's takes (``violin``, ``viola`` or ``cello``).
+
+    Raises
+    ------
+    SchemaError
+        The mapping or the file metadata names an unknown instrument.
+    """
+    if source.mapping is not None:
+        name = _read_toml(source.mapping).get("source", {}).get("instrument",
+                                                                 DEFAULT_INSTRUMENT)
+        return check_instrument(name, str(source.mapping))
+    if source.path.suffix.lower() in (".parquet", ".pq"):
+        try:
+            meta = pq.read_schema(source.path).metadata
+        except Exception:  # noqa: BLE001 - load_source reports an unreadable file
+            return DEFAULT_INSTRUMENT
+        return recording_instrument(meta, str(source.path))
+    return DEFAULT_INSTRUMENT
 
 
 def load_recording_file(path: str | os.PathLike) -> pd.DataFrame:
@@ -236,4 +269,4 @@ def recording_from_actions(actions: pd.DataFrame, *, recording_id: str = "action
 
 
 __all__ = ["Source", "load_mapped", "load_recording_file", "load_source",
-           "recording_from_actions", "resolve_sources"]
+           "recording_from_actions", "resolve_sources", "source_instrument"]

@@ -136,11 +136,16 @@ def unregister_engine(name: str) -> None:
     _REGISTRY.pop(name, None)
 
 
+def _modal(instrument: str = "violin", **settings: Any) -> Engine:
+    """The modal model, imported when an instrument is first built (not to list engines)."""
+    from synth.instrument import Instrument
+
+    return Instrument(instrument, **settings)
+
+
 def _builtin() -> None:
     if "modal" not in _REGISTRY:
-        from synth.instrument import Instrument
-
-        register_engine("modal", Instrument,
+        register_engine("modal", _modal,
                         "modal bowed strings with finger, decimator and body (physical model)")
 
 

@@ -1,7 +1,10 @@
-"""Instrument and string constants, kept as data (``synth/config/strings.toml``).
+"""Instrument and string constants: the facts of the instrument plus the string physics.
 
-The TOML file records where each number comes from. :func:`load_instrument` returns plain
-frozen dataclasses in SI units; open strings are tuned to their nominal pitch on load
+Open-string pitches and names, speaking lengths, tuning and body scale are the instrument
+facts (:mod:`data_schemas.instruments`); ``synth/config/strings.toml`` adds each string's
+physics (tension, diameter, density, stiffness, friction, damping, reference force, bowed
+pitch offset) and records where each number comes from. :func:`load_instrument` returns
+plain frozen dataclasses in SI units; open strings are tuned to their nominal pitch on load
 (by default so that the bowed string sounds it, as a player tunes).
 """
 
@@ -14,9 +17,11 @@ from functools import cache
 from importlib import resources
 from pathlib import Path
 
-from data_schemas.errors import ParameterError
+from data_schemas.errors import ParameterError, SchemaError
+from data_schemas.instruments import INSTRUMENT_NAMES, instrument_facts, limits
 
-INSTRUMENT_NAMES = ("violin", "viola", "cello")
+#: Keys of the instrument facts that a strings file must not repeat.
+_FACT_KEYS = {"name", "midi_pitch", "length", "bow_hair_length", "body_scale", "tuning_a4"}
 
 
 @dataclass(frozen=True)
@@ -108,11 +113,10 @@ class StringConstants:
 
 @dataclass(frozen=True)
 class InstrumentConstants:
-    """An instrument: its strings (lowest first), bow length and body size."""
+    """An instrument: its strings (lowest first), body size and tuning (A4, Hz)."""
 
     name: str
     strings: tuple[StringConstants, ...]
-    bow_hair_length: float
     body_scale: float
     tuning_a4: float
 
@@ -136,28 +140,51 @@ PER_STRING_DEFAULTS = ("finger_stiffness", "finger_damping", "damping_b1", "damp
                        "friction_model", "rosin_heat", "rosin_cooling_time")
 
 
+def _no_facts(entry: dict, where: str, path: str) -> None:
+    repeated = sorted(_FACT_KEYS & set(entry))
+    if repeated:
+        raise SchemaError(f"{where} sets {repeated}: instrument facts are read from "
+                          "data_schemas/config/instruments.toml, not from a strings file",
+                          source=path)
+
+
+def _strings(inst: dict, per_string: dict, tuning: str, tuning_a4: float,
+             path: str) -> tuple[StringConstants, ...]:
+    """The strings of one ``[[instrument]]`` entry: facts + physics, tuned."""
+    facts = instrument_facts(inst["name"])
+    entries = inst["strings"]
+    if len(entries) != facts.n_strings:
+        raise SchemaError(f"instrument {facts.name!r} lists {len(entries)} strings, the facts "
+                          f"{facts.n_strings}", source=path)
+    strings = []
+    for i, entry in enumerate(entries):
+        _no_facts(entry, f"{facts.name} string {i}", path)
+        string = StringConstants(name=facts.string_names[i], midi_pitch=facts.open_strings[i],
+                                 length=facts.string_lengths[i], **{**per_string, **entry})
+        if tuning != "published":
+            offset = string.bowed_pitch_offset_cents if tuning == "bowed" else 0.0
+            string = tuned(string, string.nominal_frequency(tuning_a4)
+                           * 2.0 ** (-offset / 1200.0))
+        strings.append(string)
+    return tuple(strings)
+
+
 @cache
 def _load_all(path: str, tuning: str) -> dict[str, InstrumentConstants]:
     with open(path, "rb") as fh:
         data = tomllib.load(fh)
     defaults = data.get("defaults", {})
-    tuning_a4 = float(defaults.get("tuning_a4", 440.0))
+    _no_facts(defaults, "[defaults]", path)
+    tuning_a4 = limits().tuning_a4
     per_string = {k: defaults[k] for k in PER_STRING_DEFAULTS if k in defaults}
     out = {}
     for inst in data["instrument"]:
-        strings = []
-        for entry in inst["strings"]:
-            string = StringConstants(**{**per_string, **entry})
-            if tuning != "published":
-                offset = string.bowed_pitch_offset_cents if tuning == "bowed" else 0.0
-                string = tuned(string, string.nominal_frequency(tuning_a4)
-                               * 2.0 ** (-offset / 1200.0))
-            strings.append(string)
-        out[inst["name"]] = InstrumentConstants(
-            name=inst["name"], strings=tuple(strings),
-            bow_hair_length=float(inst["bow_hair_length"]),
-            body_scale=float(inst["body_scale"]), tuning_a4=tuning_a4,
-        )
+        _no_facts({k: v for k, v in inst.items() if k != "name"}, f"[[instrument]] "
+                  f"{inst.get('name')!r}", path)
+        facts = instrument_facts(inst["name"])
+        out[facts.name] = InstrumentConstants(
+            name=facts.name, strings=_strings(inst, per_string, tuning, tuning_a4, path),
+            body_scale=facts.body_scale, tuning_a4=tuning_a4)
     return out
 
 
@@ -170,7 +197,8 @@ def load_instrument(name: str, config: str | Path | None = None, *,
     name : str
         Instrument name.
     config : path-like, optional
-        A TOML file in the format of ``synth/config/strings.toml`` to use instead.
+        A TOML file in the format of ``synth/config/strings.toml`` (string physics only; the
+        facts come from :mod:`data_schemas.instruments`) to use instead.
     tuning : {"bowed", "first_mode", "published"}
         How open strings are tuned: so that the bowed string sounds its nominal pitch
         (default, as a player tunes), so that the first mode does, or not at all.
@@ -181,3 +209,7 @@ def load_instrument(name: str, config: str | Path | None = None, *,
     if name not in table:
         raise ParameterError(f"instrument={name!r} is unknown; choose one of {sorted(table)}")
     return table[name]
+
+
+__all__ = ["INSTRUMENT_NAMES", "TUNINGS", "InstrumentConstants", "StringConstants",
+           "load_instrument", "tuned"]

@@ -3,17 +3,19 @@
 import numpy as np
 import pytest
 
+from gesture_db.playing import play_script
+from gesture_db.script import recording_script
 from gesture_db.segment import detect_notes, refine_boundaries
 from gesture_db.segment_kernel import viterbi_boundaries
 from gesture_db.segment_score import score_segmentation
-from gesture_db.simulate import PERFORMERS, perform, recording_script
+from gesture_db.simulate_config import PERFORMERS
 
 
 @pytest.fixture(scope="module", params=range(3), ids=[p.name for p in PERFORMERS])
 def take(request):
     rng = np.random.default_rng(100 + request.param)
     script = recording_script(250, rng)
-    return perform(script, PERFORMERS[request.param], rng, recording_id="t")
+    return play_script(script, PERFORMERS[request.param], rng, recording_id="t")
 
 
 def test_simulated_signals_are_plausible(take):

@@ -149,9 +149,27 @@ def test_no_function_over_80_lines_outside_numba_kernels():
     assert long_functions() == []
 
 
-@pytest.mark.parametrize("argv", [["--help"], ["render", "--help"], ["build-db", "--help"]])
+def command_paths(parser=None, prefix=()) -> list[tuple[str, ...]]:
+    """Every sub-command of ``arco`` (nested ones such as ``db info`` included)."""
+    import argparse
+
+    from pipelines.cli.main import build_parser
+
+    parser = parser or build_parser()
+    out = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                out.append((*prefix, name))
+                out.extend(command_paths(sub, (*prefix, name)))
+    return out
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["--version"]]
+                         + [[*path, "--help"] for path in command_paths()], ids=" ".join)
 def test_help_imports_no_heavy_library(argv):
-    """``arco --help`` starts fast because nothing numeric is imported to print it."""
+    """``arco --help`` and every ``arco COMMAND --help`` start fast: nothing numeric is
+    imported to print them."""
     code = ("import sys\nfrom pipelines.cli.main import main\n"
             f"try:\n    main({argv!r})\nexcept SystemExit:\n    pass\n"
             "heavy = sorted(m for m in ('numpy', 'pandas', 'pyarrow', 'scipy', 'numba', "

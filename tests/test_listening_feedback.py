@@ -1,6 +1,6 @@
 import numpy as np
 import pytest
-from _listening import d_string_notes, models_dir  # noqa: F401
+from _listening import d_string_notes
 
 from data_schemas.actions import validate_actions
 from pipelines.listening.evaluate import evaluate
@@ -13,7 +13,7 @@ CFG = load_config()
 
 
 @pytest.fixture(scope="module")
-def feedback(models_dir):  # noqa: F811
+def feedback(models_dir):
     return render_feedback(d_string_notes(), CFG, models_dir=models_dir, instrument="violin",
                            seed=0)
 
@@ -32,7 +32,7 @@ def test_feedback_render_records_what_it_played(feedback):
     assert set(diagnostics["string"]) == {1}
 
 
-def test_feedback_is_deterministic(models_dir, feedback):  # noqa: F811
+def test_feedback_is_deterministic(models_dir, feedback):
     again = render_feedback(d_string_notes(), CFG, models_dir=models_dir,
                             instrument="violin", seed=0)
     np.testing.assert_array_equal(again[0], feedback[0])

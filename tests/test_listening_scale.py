@@ -1,7 +1,7 @@
 """Acceptance: a two-octave scale under feedback control sounds right (issue 4, item 7)."""
 
 import pytest
-from _listening import MF_PAIRS, mf_models_dir, models_dir  # noqa: F401
+from _listening import MF_PAIRS
 
 from pipelines.listening.evaluate import evaluate
 from pipelines.methods.feedback import render_feedback, scale_notes
@@ -20,7 +20,7 @@ def scale():
 
 
 @pytest.fixture(scope="module")
-def feedback_share(mf_models_dir, scale):  # noqa: F811
+def feedback_share(mf_models_dir, scale):
     audio, actions, diagnostics, _ = render_feedback(scale, CFG, models_dir=mf_models_dir,
                                                      instrument="violin", seed=0)
     piece = evaluate(audio, actions, diagnostics=diagnostics)["piece"]
@@ -78,6 +78,6 @@ def _fresh_clip_accuracy(directory, string, dynamic, *, every=3, seed=10**6):
     return float(np.mean(model.predict(X) == y))
 
 
-def test_classifier_accuracy_of_every_mf_pair_on_fresh_clips(mf_models_dir):  # noqa: F811
+def test_classifier_accuracy_of_every_mf_pair_on_fresh_clips(mf_models_dir):
     accuracy = {s: _fresh_clip_accuracy(mf_models_dir, s, d) for s, d in MF_PAIRS}
     assert min(accuracy.values()) >= 0.95, accuracy

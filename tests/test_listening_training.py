@@ -2,7 +2,7 @@ import json
 
 import numpy as np
 import pytest
-from _listening import PAIR, TINY, models_dir  # noqa: F401
+from _listening import PAIR, TINY
 
 from data_schemas import ArcoError
 from pipelines.cli.main import main
@@ -11,7 +11,7 @@ from synth.listening.classifier import ModelError, load_models, load_pair, pair_
 from synth.listening.training import attack_cost, clip_features, stability_cost
 
 
-def test_trained_pair_has_metadata_and_high_cv_accuracy(models_dir):  # noqa: F811
+def test_trained_pair_has_metadata_and_high_cv_accuracy(models_dir):
     model = load_pair(models_dir, "violin", *PAIR)
     meta = model.metadata
     assert meta["complete"] and meta["cv_folds"] == 10 and meta["cv_split"] == "by clip"
@@ -21,7 +21,7 @@ def test_trained_pair_has_metadata_and_high_cv_accuracy(models_dir):  # noqa: F8
     assert (models_dir / "labels.parquet").exists()
 
 
-def test_cv_accuracy_by_clip_of_the_d_string_mf_pair(models_dir):  # noqa: F811
+def test_cv_accuracy_by_clip_of_the_d_string_mf_pair(models_dir):
     """One pair at the target, recomputed here; every mf pair: tests/test_listening_scale.py.
 
     The pair's training clips are played again (training is deterministic: the same data
@@ -46,7 +46,7 @@ def test_cv_accuracy_by_clip_of_the_d_string_mf_pair(models_dir):  # noqa: F811
     assert np.mean(predicted == y) >= 0.95
 
 
-def test_fast_predictor_agrees_with_sklearn(models_dir):  # noqa: F811
+def test_fast_predictor_agrees_with_sklearn(models_dir):
     from synth.listening.clips import ClipSpec, render_clip
     from synth.listening.training import JudgedClip
 
@@ -58,12 +58,12 @@ def test_fast_predictor_agrees_with_sklearn(models_dir):  # noqa: F811
     assert [fast(x) for x in X] == model.predict(X).tolist()
 
 
-def test_resume_skips_finished_pairs(models_dir):  # noqa: F811
+def test_resume_skips_finished_pairs(models_dir):
     assert train_instrument("violin", models_dir, pairs=[PAIR], settings=TINY, workers=1,
                             progress=False) == []
 
 
-def test_corrupted_model_gives_a_clear_error(models_dir, tmp_path, capsys):  # noqa: F811
+def test_corrupted_model_gives_a_clear_error(models_dir, tmp_path, capsys):
     import shutil
 
     key = pair_key("violin", *PAIR)
@@ -96,7 +96,7 @@ def test_train_cli_rejects_bad_input(tmp_path, capsys):
     assert main(["train", "-o", str(tmp_path), "--pairs", "9:mf"]) == 2
 
 
-def test_fast_predictor_agrees_with_sklearn_near_the_boundaries(models_dir):  # noqa: F811
+def test_fast_predictor_agrees_with_sklearn_near_the_boundaries(models_dir):
     model = load_pair(models_dir, "violin", *PAIR)
     scaler, svc = model.pipeline[0], model.pipeline[-1]
     rng = np.random.default_rng(0)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import zipfile
 
 import numpy as np
@@ -12,13 +11,6 @@ from _notation_score import write_score
 import pipelines.cli.main as cli
 from data_schemas.actions import read_actions
 from data_schemas.notes import read_notes
-
-
-@pytest.fixture(autouse=True)
-def only_present_commands(monkeypatch):
-    """Register the commands that exist (other sub-commands are written elsewhere)."""
-    present = tuple(m for m in cli.COMMAND_MODULES if importlib.util.find_spec(m) is not None)
-    monkeypatch.setattr(cli, "COMMAND_MODULES", present)
 
 
 @pytest.fixture(scope="module")
@@ -69,7 +61,11 @@ def test_config_override(score, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (("--method", "gestures"), "--method 'gestures' is not available"),
+    (("--method", "gestures"), "--method gestures: unknown method (choose from: rules,"),
+    (("--method", "feedback"), "feedback: need --models DIR"),
+    (("--method", "sampling", "--models", "."), "sampling: need --db DB"),
+    (("--method", "sampling-open", "--db", "NOWHERE"), "no gesture database"),
+    (("--method", "rules", "--models", "NOWHERE"), "--models NOWHERE: no such directory"),
     (("--method", "rules", "--part", "Cello"), "matches no parts"),
     (("--method", "rules", "--part", "3"), "out of range"),
     (("--method", "rules", "--skill", "5"), "--skill 5"),
@@ -77,6 +73,8 @@ def test_config_override(score, tmp_path, capsys):
     (("--method", "rules", "--instrument", "cello", "--all-parts"), "single part"),
 ])
 def test_render_errors_are_one_line(score, tmp_path, capsys, argv, message):
+    argv = [str(tmp_path / "nowhere") if a == "NOWHERE" else a for a in argv]
+    message = message.replace("NOWHERE", str(tmp_path / "nowhere"))
     code, _, err = run(capsys, "render", score, *argv, "--actions", tmp_path / "a.parquet")
     assert code == 2
     assert message in err and len(err.strip().splitlines()) == 1
@@ -111,7 +109,6 @@ def test_bad_score_files_exit_2_naming_the_file(tmp_path, capsys, name, content)
 
 
 def test_render_audio_all_parts(tmp_path, capsys):
-    pytest.importorskip("synth", reason="synthesizer not present")
     import soundfile
     from music21 import note, stream
 
@@ -134,3 +131,66 @@ def test_render_audio_all_parts(tmp_path, capsys):
     assert 0.01 < np.abs(audio).max() <= 0.89 and np.isfinite(audio).all()
     assert (tmp_path / "duo-0-violin.parquet").exists()
     assert (tmp_path / "duo-1-cello.parquet").exists()
+
+
+class Silence:
+    """An engine that plays nothing and remembers what it was built for."""
+
+    built: list[tuple[str, int, int]] = []
+    has_diagnostics = False
+    n_strings = 4
+
+    def __init__(self, instrument="violin", *, sample_rate=44100, seed=0, **options):
+        self.name, self.sample_rate = instrument, sample_rate
+        Silence.built.append((instrument, sample_rate, seed))
+
+    def reset(self):
+        pass
+
+    def process(self, n_samples, controls=None, *, plucks=(), diagnostics=True):
+        raise NotImplementedError
+
+    def render(self, actions, *, tail=0.5, progress=False, diagnostics=False):
+        n = int((float(actions["time"].max()) + tail) * self.sample_rate)
+        return np.zeros(n, np.float32), None
+
+
+@pytest.fixture
+def silence():
+    from synth.engines import register_engine, unregister_engine
+
+    Silence.built.clear()
+    register_engine("silence", Silence, "plays nothing (a test engine)")
+    yield Silence
+    unregister_engine("silence")
+
+
+def test_engine_option_reaches_the_engine(score, tmp_path, capsys, silence):
+    import soundfile
+
+    code, _, err = run(capsys, "render", score, "--method", "rules", "--engine", "silence",
+                       "--seed", "3", "--end-measure", "2", "-o", tmp_path / "s.wav", "--quiet")
+    assert code == 0, err
+    audio, _ = soundfile.read(tmp_path / "s.wav")
+    assert audio.size > 0 and not audio.any()
+    assert silence.built == [("violin", 44100, 3)]
+    code, out, _ = run(capsys, "engines")
+    assert code == 0 and out.splitlines()[0].startswith("modal ")
+    assert any(line.split()[0] == "silence" for line in out.splitlines())
+
+
+def test_synth_engine_option(tmp_path, capsys, silence):
+    from data_schemas.actions import write_actions
+    from pipelines.perform.scale import scale_actions
+
+    write_actions(scale_actions("viola")[0], tmp_path / "a.parquet")
+    code, _, err = run(capsys, "synth", tmp_path / "a.parquet", "--instrument", "viola",
+                       "--engine", "silence", "--seed", "5", "-o", tmp_path / "a.wav")
+    assert code == 0, err
+    assert silence.built == [("viola", 44100, 5)]
+
+
+def test_unknown_engine_is_a_usage_error(score, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["render", str(score), "--engine", "nonesuch", "-o", str(tmp_path / "a.wav")])
+    assert exc.value.code == 2 and "invalid choice: 'nonesuch'" in capsys.readouterr().err

@@ -8,6 +8,7 @@ import pytest
 from _notation_score import write_score
 
 from data_schemas.actions import validate_actions
+from data_schemas.instruments import finger_ratio, instrument_facts
 from pipelines.perform.config import dynamic_table, load_config
 from pipelines.perform.rules import perform_part, string_force_factors
 from pipelines.score import read_score
@@ -63,9 +64,35 @@ def bowed(perf, a: float, b: float) -> pd.DataFrame:
     return w[(w["bow_force"] > 0) & ~w["pluck"]]
 
 
-def test_actions_table_is_valid_and_time_ordered(perf):
+def plays(perf, pitch: int, a: float, b: float) -> bool:
+    """Whether some string is bowed or plucked at MIDI ``pitch`` by a frame in [a, b] s."""
+    w = window(perf, a, b)
+    w = w[(w["bow_force"] > 0) | w["pluck"]]
+    opens = np.asarray(instrument_facts("violin").open_strings)[w["string"].to_numpy(int)]
+    return bool(np.any((pitch >= opens) & np.isclose(
+        w["finger_ratio"].to_numpy(), [finger_ratio(k) for k in np.maximum(pitch - opens, 0)],
+        atol=1e-5)))
+
+
+def test_every_note_starts_at_its_score_onset(notes, perf):
+    """Each note (tie continuations aside) sounds from its score onset: at once, after the
+    grace notes before it, or after the lower notes of a rolled chord (the notes table says
+    which; the performance's own event times are not used)."""
     validate_actions(perf.actions)
-    assert np.all(np.diff(perf.actions["time"]) >= 0)
+    art = CFG["articulations"]
+    late = []
+    for _, n in notes[~notes["tie_stop"]].iterrows():
+        t = at(n["onset"])
+        graces = notes["grace"] & (notes["onset"] == n["onset"])
+        delay = art["grace_duration"] * int(graces.sum()) if not n["grace"] else 0.0
+        if n["chord_size"] > 2:  # rolled: two strings at once, then one more per roll_time
+            delay += art["roll_time"] * max(0, n["chord_index"] - 1)
+        starts = plays(perf, n["midi_pitch"], t - 1e-6, t + delay + 1e-3)
+        holds = n["technique"] == "pizz" or plays(perf, n["midi_pitch"], t + delay,
+                                                   t + delay + 0.01)
+        if not (starts and holds):
+            late.append((n["measure"], n["onset"], n["midi_pitch"]))
+    assert late == []
 
 
 def test_dynamics_set_beta_and_velocity(perf):

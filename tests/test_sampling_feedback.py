@@ -2,12 +2,11 @@
 
 import numpy as np
 import pytest
-from _listening import d_string_notes, models_dir  # noqa: F401
-from test_sampling_render import tiny_db  # noqa: F401
+from _listening import d_string_notes
 
 
 @pytest.fixture(scope="module")
-def played(tiny_db, models_dir):  # noqa: F811
+def played(tiny_db, models_dir):
     from pipelines.methods.sampling import open_database, render_sampling
 
     sdb = open_database(tiny_db / "db")

@@ -12,23 +12,6 @@ from gesture_db.join import Piece, join_run
 from gesture_db.stretch import edge_length, stretch, warp
 
 
-@pytest.fixture(scope="session")
-def tiny_db(tmp_path_factory):
-    """A database of one simulated 300-note take, with predictors saved beside it."""
-    from gesture_db.build import build_database
-    from gesture_db.predict import fit_predictors, save_predictors
-    from gesture_db.simulate import simulate_recordings
-    from gesture_db.store import GestureDB
-
-    base = tmp_path_factory.mktemp("sampling")
-    rec = base / "rec"
-    simulate_recordings(300, 2, rec, seed=11, notes_per_take=150)
-    build_database([rec], base / "db", workers=1, progress=False)
-    db = GestureDB(base / "db")
-    save_predictors(fit_predictors(db, max_folds=2), db.path)
-    return base
-
-
 def _targets(annotation: pd.DataFrame) -> pd.DataFrame:
     fr = annotation["finger_ratio"].to_numpy(np.float64)
     t = pd.DataFrame(dict(

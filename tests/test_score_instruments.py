@@ -6,13 +6,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from data_schemas.errors import ParameterError
+from data_schemas.instruments import finger_ratio, instrument_facts
 from pipelines.perform.instruments import (
-    INSTRUMENTS,
     choose_strings,
-    finger_ratio,
     fit_range,
-    get_instrument,
     guess_instrument,
+    string_index,
 )
 from pipelines.score import ScoreError
 
@@ -31,36 +31,44 @@ def part(pitches, **columns) -> pd.DataFrame:
 
 
 def test_tunings():
-    assert INSTRUMENTS["violin"].open_strings == (55, 62, 69, 76)
-    assert INSTRUMENTS["viola"].open_strings == (48, 55, 62, 69)
-    assert INSTRUMENTS["cello"].open_strings == (36, 43, 50, 57)
+    assert instrument_facts("violin").open_strings == (55, 62, 69, 76)
+    assert instrument_facts("viola").open_strings == (48, 55, 62, 69)
+    assert instrument_facts("cello").open_strings == (36, 43, 50, 57)
+    with pytest.raises(ParameterError, match="not one of"):
+        instrument_facts("guitar")
+
+
+def test_string_index_by_letter_syllable_and_roman_numeral():
+    cello = instrument_facts("cello")
+    assert [string_index(cello, n) for n in ("C", "sol", "re.", "I", "IV", "E")] == \
+        [0, 1, 2, 3, 0, None]
 
 
 def test_lowest_position_and_open_strings():
-    got = choose_strings(part([55, 57, 62, 68, 69, 76, 88]), get_instrument("violin"))
+    got = choose_strings(part([55, 57, 62, 68, 69, 76, 88]), instrument_facts("violin"))
     assert got["string"].tolist() == [0, 0, 1, 1, 2, 3, 3]
     assert got["semitones"].tolist() == [0, 2, 0, 6, 0, 0, 12]
 
 
 def test_string_indication_is_honoured_where_playable():
     ind = pd.array([0, 0, None], dtype="Int8")
-    got = choose_strings(part([69, 50, 69], string_indication=ind), get_instrument("viola"))
+    got = choose_strings(part([69, 50, 69], string_indication=ind), instrument_facts("viola"))
     assert got["string"].tolist() == [0, 0, 3]
     assert got["semitones"].iloc[0] == 21
 
 
 def test_slurred_group_stays_on_one_string_where_it_fits():
     slur = pd.array([0, 0, 0], dtype="Int32")
-    got = choose_strings(part([66, 67, 69], slur_id=slur), get_instrument("violin"))
+    got = choose_strings(part([66, 67, 69], slur_id=slur), instrument_facts("violin"))
     assert got["string"].nunique() == 1 and got["string"].iloc[0] == 1
-    free = choose_strings(part([66, 67, 69]), get_instrument("violin"))
+    free = choose_strings(part([66, 67, 69]), instrument_facts("violin"))
     assert free["string"].nunique() == 2
 
 
 def test_double_stop_on_adjacent_strings_else_rolled():
     notes = part([62, 69, 55, 62, 71], onset_beats=[0.0, 0.0, 1.0, 1.0, 1.0],
                  chord_size=[2, 2, 3, 3, 3], chord_index=[0, 1, 0, 1, 2])
-    got = choose_strings(notes, get_instrument("violin"))
+    got = choose_strings(notes, instrument_facts("violin"))
     assert got["string"].tolist()[:2] == [1, 2] and not got["rolled"].iloc[:2].any()
     assert got["rolled"].iloc[2:].all()
     assert got["string"].iloc[2:].is_monotonic_increasing
@@ -69,8 +77,8 @@ def test_double_stop_on_adjacent_strings_else_rolled():
 def test_out_of_range_names_part_and_measure_unless_transposed():
     notes = part([40, 60], measure=[7, 8])
     with pytest.raises(ScoreError, match=r"part 'Violin', measure 7"):
-        fit_range(notes, get_instrument("violin"))
-    folded = fit_range(notes, get_instrument("violin"), transpose_octaves=True)
+        fit_range(notes, instrument_facts("violin"))
+    folded = fit_range(notes, instrument_facts("violin"), transpose_octaves=True)
     assert folded["midi_pitch"].tolist() == [64, 60]
 
 

@@ -33,10 +33,22 @@ def test_plucked_fundamental_t60_within_20_percent_of_damping():
     assert abs(measured_t60 / predicted_t60 - 1) < 0.2, (measured_t60, predicted_t60)
 
 
-def test_pluck_is_loud_then_silent_before_pull_ends():
-    audio = render_actions(pluck_actions(3), body=None, tail=1.0)
-    assert np.abs(audio[: int(0.2 * 44100)]).max() > 0.01
+def test_string_is_silent_before_the_pluck_then_loud_then_dies_away():
+    sr, t_pluck, string_index = 44100, 0.2, 3
+    actions = pd.concat([pluck_actions(string_index).iloc[[0]].assign(pluck=False),
+                         pluck_actions(string_index).assign(time=[t_pluck, t_pluck + 0.01])],
+                        ignore_index=True)
+    audio = render_actions(actions, body=None, tail=1.0).astype(np.float64)
     assert np.all(np.isfinite(audio))
+    n = int(t_pluck * sr)
+    assert not audio[:n].any()  # nothing touches the string before the pluck: exact silence
+    peak = int(np.argmax(np.abs(audio)))
+    assert n <= peak < n + int(0.2 * sr) and np.abs(audio[peak]) > 0.01
+    # then it dies away at least as fast as its fundamental's damping predicts
+    damping = load_instrument("violin").strings[string_index].damping_b1  # 1/s
+    last = audio[-int(0.1 * sr):]
+    elapsed = (audio.size - last.size - peak) / sr
+    assert np.abs(last).max() < np.abs(audio[peak]) * np.exp(-damping * elapsed)
 
 
 def test_pluck_strength_follows_the_rows_bow_force():

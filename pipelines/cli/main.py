@@ -2,7 +2,10 @@
 
 Every sub-command lives in :mod:`pipelines.cli.commands` and exposes ``register(subparsers)``,
 which adds its parser and sets ``func`` to a function taking the parsed arguments and
-returning an exit code. Errors Arco raises on purpose print one line and exit with 2.
+returning an exit code. Command modules import only the standard library and light modules
+of ours at module level (their numeric dependencies are imported inside ``run``), so
+``arco --help`` and every ``arco COMMAND --help`` start without numpy. Errors Arco raises on
+purpose print one line and exit with 2.
 """
 
 from __future__ import annotations
@@ -13,10 +16,12 @@ import sys
 from collections.abc import Sequence
 
 from data_schemas.errors import ArcoError
+from pipelines.cli.help import ArcoParser
 
 #: Sub-command modules, in the order ``arco --help`` lists them.
 COMMAND_MODULES = (
     "pipelines.cli.commands.synth",
+    "pipelines.cli.commands.engines",
     "pipelines.cli.commands.demo",
     "pipelines.cli.commands.notes",
     "pipelines.cli.commands.render",
@@ -31,12 +36,29 @@ COMMAND_MODULES = (
 EXIT_USAGE = 2
 
 
+class _Version(argparse.Action):
+    """``--version``: read the installed package's version only when asked."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help="print the version of arco and exit"):
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            number = version("arco")
+        except PackageNotFoundError:  # pragma: no cover - running from an uninstalled tree
+            number = "unknown (not installed)"
+        print(f"arco {number}")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the ``arco`` parser with every registered sub-command."""
-    parser = argparse.ArgumentParser(
-        prog="arco",
-        description="Arco: sheet music to violin-family performances.",
-    )
+    parser = ArcoParser(prog="arco",
+                        description="Arco: sheet music to violin-family performances.")
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)

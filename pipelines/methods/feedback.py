@@ -20,10 +20,9 @@ import pandas as pd
 from data_schemas.actions import validate_actions
 from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
 from data_schemas.errors import ParameterError
-from data_schemas.instruments import limits, semitones_of
+from data_schemas.instruments import finger_ratio, instrument_facts, limits, semitones_of
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Performance
-from pipelines.perform.instruments import get_instrument
 from pipelines.perform.rules import fermata_warp, perform_part
 from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog
 from synth.listening.features import HOP
@@ -60,7 +59,7 @@ def hop_plan(perf: Performance, config: dict[str, Any], instrument: str, *,
         Hops inside each string's first..last rules frame (frames are written there).
     """
     actions = perf.actions
-    inst = get_instrument(instrument)
+    inst = instrument_facts(instrument)
     end = float(actions["time"].max()) if len(actions) else 0.0
     n = int(np.ceil(end * sample_rate / HOP)) + 1
     t = (np.arange(n) + 1) * HOP / sample_rate
@@ -245,7 +244,7 @@ def played_actions(perf: Performance, plan: HopPlan, span: np.ndarray, log: Perf
         pos = np.interp(t[keep], rows["time"].to_numpy(), rows["bow_position"].to_numpy())
         frames.append(pd.DataFrame({
             "time": t[keep], "string": s,
-            "finger_ratio": np.minimum(1.0 - 2.0 ** (-plan.semitones[keep, s] / 12.0), 0.8),
+            "finger_ratio": np.minimum(finger_ratio(plan.semitones[keep, s]), 0.8),
             "bow_force": np.where(plan.bowed[keep, s], log.force[keep, s], 0.0),
             "bow_velocity": np.where(plan.bowed[keep, s], log.velocity[keep, s], 0.0),
             "beta": plan.beta[keep, s], "bow_position": pos, "pluck": False}))

@@ -1,69 +1,168 @@
-"""One entry point per rendering method: notes -> rendered parts (audio, actions, diagnostics).
+"""The rendering methods, by name: notes -> rendered parts (audio, actions, diagnostics).
 
-Methods (:data:`METHODS`): ``rules`` (performance rules, open loop), ``feedback`` (rules'
-bowing, the listening controller owns the force), ``sampling`` (gestures sampled from the
-database, the controller corrects the sampled force) and ``sampling-open`` (sampled
-gestures, open loop). ``arco render`` and ``arco compare`` both go through
-:func:`render_method`.
+A method is a :class:`Method` record: a name, a one-line summary, whether it needs a gesture
+database (``--db``) or listening models (``--models``), and a ``render(notes, parts, **kw)``
+callable returning one :class:`~pipelines.methods.result.PartOutput` per part. The built-in
+ones (``rules``, ``feedback``, ``sampling``, ``sampling-open``) live in
+:mod:`pipelines.methods.builtin` and are imported when a method first renders, so listing
+the methods (``arco render --help``) imports nothing numeric. A new method is one module and
+one :func:`register_method` call (or one entry in :data:`BUILTIN`). ``arco render``,
+``arco compare`` and :func:`pipelines.render_score` all go through :func:`render_method`.
+
+Examples
+--------
+>>> method_names()
+['rules', 'feedback', 'sampling', 'sampling-open']
+>>> get_method("feedback").needs_models, get_method("feedback").needs_db
+(True, False)
+>>> def silence(notes, parts, **settings):
+...     return []
+>>> register_method(Method("silence", "plays nothing (an example)", silence))
+>>> "silence" in method_names()
+True
+>>> unregister_method("silence")
 """
 
 from __future__ import annotations
 
+import importlib
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
-
-import numpy as np
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from data_schemas.errors import ParameterError
 
-#: Methods and what they are.
-METHODS = {
-    "rules": "performance rules (notation -> bowing), open loop",
-    "feedback": "rules' bowing, force chosen by the listening controller",
-    "sampling": "gestures sampled from the database, force corrected by the controller",
-    "sampling-open": "gestures sampled from the database, open loop",
-}
-@dataclass
-class PartOutput:
-    """One rendered part of one method."""
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    import pandas as pd
 
-    part_index: int
-    part_name: str
-    instrument: str
-    audio: np.ndarray
-    actions: pd.DataFrame
-    events: pd.DataFrame
-    diagnostics: pd.DataFrame | None
-    notes: pd.DataFrame
-    warnings: list[str] = field(default_factory=list)
+    from pipelines.methods.result import MethodOutput
 
 
-@dataclass
-class MethodOutput:
-    """All parts of one score rendered by one method."""
+@dataclass(frozen=True)
+class Method:
+    """A registered rendering method.
 
-    method: str
-    stem: str
-    audio: np.ndarray
-    parts: list[PartOutput] = field(default_factory=list)
-    render_seconds: float = 0.0
+    Attributes
+    ----------
+    name : str
+        Name used by ``--method``/``--methods`` and :func:`get_method`.
+    summary : str
+        One line for ``--help`` and the comparison report.
+    render : callable
+        ``render(notes, parts, *, config, database, models, seed, sample_rate, instrument,
+        skill, transpose_octaves, diagnostics, progress, engine)`` -> list of
+        :class:`~pipelines.methods.result.PartOutput` (one per part index in ``parts``).
+    needs_db : bool
+        Plays gestures from a gesture database (``database`` is an opened
+        :class:`~pipelines.methods.sampling.SamplingDatabase`).
+    needs_models : bool
+        Listens with trained listening models (``models`` is their directory).
+    """
+
+    name: str
+    summary: str
+    render: Callable[..., list]
+    needs_db: bool = False
+    needs_models: bool = False
 
 
-def check_methods(methods: list[str], *, db, models) -> None:
-    """Raise :class:`ParameterError` for unknown methods or missing --db / --models."""
-    bad = [m for m in methods if m not in METHODS]
-    if bad or not methods:
-        raise ParameterError(f"--methods {','.join(methods)}: unknown {bad or 'none given'} "
-                             f"(choose from {', '.join(METHODS)})")
-    if db is None and any(m.startswith("sampling") for m in methods):
-        raise ParameterError("methods sampling and sampling-open need --db DB (a gesture "
-                             "database from arco build-db)")
-    if models is None and any(m in ("feedback", "sampling") for m in methods):
-        raise ParameterError("methods feedback and sampling need --models DIR (listening "
-                             "models from arco train)")
+def lazy(target: str) -> Callable[..., Any]:
+    """A callable that imports ``"package.module:function"`` when first called."""
+    module, _, attr = target.partition(":")
+
+    def call(*args: Any, **kwargs: Any) -> Any:
+        return getattr(importlib.import_module(module), attr)(*args, **kwargs)
+
+    call.__name__ = call.__qualname__ = attr
+    call.__doc__ = f"Calls :func:`{module}.{attr}` (imported on first use)."
+    return call
+
+
+#: The built-in methods, in the order ``--help`` and reports list them.
+BUILTIN = (
+    Method("rules", "performance rules (notation -> bowing), open loop",
+           lazy("pipelines.methods.builtin:play_rules")),
+    Method("feedback", "rules' bowing, force chosen by the listening controller",
+           lazy("pipelines.methods.builtin:play_feedback"), needs_models=True),
+    Method("sampling", "gestures sampled from the database, force corrected by the controller",
+           lazy("pipelines.methods.builtin:play_sampling"), needs_db=True, needs_models=True),
+    Method("sampling-open", "gestures sampled from the database, open loop",
+           lazy("pipelines.methods.builtin:play_sampling_open"), needs_db=True),
+)
+
+_REGISTRY: dict[str, Method] = {m.name: m for m in BUILTIN}
+
+
+def register_method(method: Method) -> None:
+    """Add ``method`` to the registry.
+
+    Raises
+    ------
+    ParameterError
+        A method of that name is already registered.
+    """
+    if method.name in _REGISTRY:
+        raise ParameterError(f"method {method.name!r} is already registered")
+    _REGISTRY[method.name] = method
+
+
+def unregister_method(name: str) -> None:
+    """Remove method ``name`` (no error if it is absent)."""
+    _REGISTRY.pop(name, None)
+
+
+def method_names() -> list[str]:
+    """Names of the registered methods, built-in ones first in their order."""
+    return list(_REGISTRY)
+
+
+def get_method(name: str, *, option: str = "--method") -> Method:
+    """The registered method ``name``.
+
+    Raises
+    ------
+    ParameterError
+        Unknown name (the message lists the known ones).
+    """
+    if name not in _REGISTRY:
+        raise ParameterError(f"{option} {name}: unknown method (choose from: "
+                             f"{', '.join(_REGISTRY)})")
+    return _REGISTRY[name]
+
+
+class _Summaries(Mapping):
+    """Read-only view: method name -> summary, always in step with the registry."""
+
+    def __getitem__(self, name: str) -> str:
+        return _REGISTRY[name].summary
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(_REGISTRY)
+
+    def __len__(self) -> int:
+        return len(_REGISTRY)
+
+
+#: Method name -> one-line summary (a live view of the registry).
+METHODS: Mapping[str, str] = _Summaries()
+
+
+def check_methods(methods: list[str], *, db, models, option: str = "--methods") -> None:
+    """Raise :class:`ParameterError` for unknown methods or a missing --db / --models."""
+    if not methods:
+        raise ParameterError(f"{option}: no method given (choose from: "
+                             f"{', '.join(_REGISTRY)})")
+    chosen = [get_method(m, option=option) for m in methods]
+    need_db = [m.name for m in chosen if m.needs_db]
+    need_models = [m.name for m in chosen if m.needs_models]
+    if db is None and need_db:
+        raise ParameterError(f"{', '.join(need_db)}: need --db DB (a gesture database from "
+                             "arco build-db)")
+    if models is None and need_models:
+        raise ParameterError(f"{', '.join(need_models)}: need --models DIR (listening models "
+                             "from arco train)")
     if models is not None and not Path(models).is_dir():
         raise ParameterError(f"--models {models}: no such directory")
 
@@ -72,13 +171,13 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
                   config: dict[str, Any], database=None, models=None, seed: int = 0,
                   sample_rate: int = 44100, instrument: str | None = None, skill: int = 3,
                   transpose_octaves: bool = False, diagnostics: bool = True,
-                  progress: bool | None = False) -> MethodOutput:
-    """Render the chosen parts of one score with one method.
+                  progress: bool | None = False, engine: str = "modal") -> MethodOutput:
+    """Render the chosen parts of one score with one method and mix them.
 
     Parameters
     ----------
     method : str
-        One of :data:`METHODS`.
+        A registered method (:func:`method_names`).
     notes : pandas.DataFrame
         Notes table of the whole score (fermatas of every part make every part wait).
     parts : list of int
@@ -88,9 +187,9 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
     config : dict
         Rules configuration.
     database : SamplingDatabase, optional
-        Opened gesture database (sampling methods).
+        Opened gesture database (methods that need one).
     models : path-like, optional
-        Listening models (feedback, sampling).
+        Listening models (methods that need them).
     seed : int
     sample_rate : int, Hz
     instrument : str, optional
@@ -103,59 +202,31 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
         Record the instrument's per-hop contact diagnostics.
     progress : bool, optional
         Progress bars.
+    engine : str
+        Synthesis engine (:func:`synth.engines.engine_names`).
 
     Returns
     -------
     MethodOutput
     """
-    from pipelines.methods.result import mix
+    from pipelines.methods.result import MethodOutput, mix
 
+    if instrument is not None and len(parts) > 1:
+        raise ParameterError("--instrument applies to a single part (drop --all-parts)")
     start = time.perf_counter()
-    out: list[PartOutput] = []
-    if method == "rules":
-        from pipelines.methods.rules import render
-        from synth import render_with_diagnostics
-
-        res = render(notes, config, parts=parts, instrument=instrument, skill=skill, seed=seed,
-                     sample_rate=sample_rate, transpose_octaves=transpose_octaves, audio=False,
-                     progress=progress)
-        for p in res.parts:
-            y, diag = render_with_diagnostics(
-                p.performance.actions, instrument=p.instrument, sample_rate=sample_rate,
-                seed=seed, diagnostics=diagnostics, progress=bool(progress) and len(parts) == 1)
-            out.append(PartOutput(p.part_index, p.part_name, p.instrument, y,
-                                  p.performance.actions, p.performance.events, diag,
-                                  notes[notes["part_index"] == p.part_index],
-                                  p.performance.warnings))
-    elif method == "feedback":
-        from pipelines.methods.feedback import render_feedback
-        from pipelines.perform.rules import fermata_warp
-
-        if instrument is not None and len(parts) > 1:
-            raise ParameterError("--instrument applies to a single part (drop --all-parts)")
-        warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
-        rng = np.random.default_rng(seed)
-        for index in parts:
-            part = notes[notes["part_index"] == index]
-            name = instrument or str(part["instrument"].iloc[0])
-            y, actions, diag, perf = render_feedback(
-                part, config, models_dir=models, instrument=name, skill=skill, seed=seed,
-                sample_rate=sample_rate, transpose_octaves=transpose_octaves, warp=warp,
-                rng=rng, diagnostics=diagnostics)
-            out.append(PartOutput(index, str(part["part_name"].iloc[0]), name, y, actions,
-                                  perf.events, diag, part, perf.warnings))
-    else:
-        from pipelines.methods.sampling import render_sampling
-
-        res = render_sampling(notes, db=database, models=models,
-                              feedback=method == "sampling" and models is not None,
-                              parts=parts, instrument=instrument, config=config, seed=seed,
-                              sample_rate=sample_rate, transpose_octaves=transpose_octaves,
-                              diagnostics=diagnostics, progress=progress)
-        for p in res.parts:
-            out.append(PartOutput(p.part_index, p.part_name, p.instrument, p.audio,
-                                  p.performance.actions, p.performance.events, p.diagnostics,
-                                  notes[notes["part_index"] == p.part_index],
-                                  p.performance.warnings))
+    out = get_method(method).render(
+        notes, parts, config=config, database=database, models=models, seed=seed,
+        sample_rate=sample_rate, instrument=instrument, skill=skill,
+        transpose_octaves=transpose_octaves, diagnostics=diagnostics, progress=progress,
+        engine=engine)
     seconds = time.perf_counter() - start
     return MethodOutput(method, stem, mix([p.audio for p in out]), out, seconds)
+
+
+def __getattr__(name: str) -> Any:
+    """``MethodOutput`` and ``PartOutput`` now live in :mod:`pipelines.methods.result`."""
+    if name in ("MethodOutput", "PartOutput"):
+        from pipelines.methods import result
+
+        return getattr(result, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

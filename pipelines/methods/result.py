@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pipelines.perform.events import Performance
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    import pandas as pd
 
 #: Peak of a rendered WAV (about -1 dBFS).
 PEAK = 0.89
@@ -30,6 +34,60 @@ class RenderResult:
     audio: np.ndarray | None
     sample_rate: int
     parts: list[PartRender] = field(default_factory=list)
+
+
+@dataclass
+class PartOutput:
+    """One part as a registered method rendered it.
+
+    Attributes
+    ----------
+    part_index, part_name, instrument
+        Which part, on which instrument.
+    audio : np.ndarray [shape=(n,)], float32
+    actions : pandas.DataFrame
+        The actions table played.
+    events : pandas.DataFrame
+        The performance's note events.
+    diagnostics : pandas.DataFrame or None
+        Per-hop contact diagnostics, when recorded.
+    notes : pandas.DataFrame
+        The part's notes.
+    warnings : list of str
+    """
+
+    part_index: int
+    part_name: str
+    instrument: str
+    audio: np.ndarray
+    actions: pd.DataFrame
+    events: pd.DataFrame
+    diagnostics: pd.DataFrame | None
+    notes: pd.DataFrame
+    warnings: list[str] = field(default_factory=list)
+
+
+@dataclass
+class MethodOutput:
+    """All parts of one score rendered by one method, mixed.
+
+    Attributes
+    ----------
+    method : str
+    stem : str
+        Name of the piece.
+    audio : np.ndarray [shape=(n,)], float32
+        The mix (:func:`mix`).
+    parts : list of PartOutput
+    render_seconds : float, s
+        Wall-clock time of the render.
+    """
+
+    method: str
+    stem: str
+    audio: np.ndarray
+    parts: list[PartOutput] = field(default_factory=list)
+    render_seconds: float = 0.0
 
 
 def mix(signals: list[np.ndarray], peak: float = PEAK) -> np.ndarray:

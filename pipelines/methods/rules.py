@@ -16,7 +16,7 @@ from pipelines.perform.rules import fermata_warp, perform_part
 def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
            instrument: str | None = None, skill: int = 3, seed: int = 0,
            sample_rate: int = 44100, transpose_octaves: bool = False, audio: bool = True,
-           progress: bool | None = None) -> RenderResult:
+           progress: bool | None = None, engine: str = "modal") -> RenderResult:
     """Play the chosen parts with the performance rules and (optionally) synthesize them.
 
     Parameters
@@ -41,6 +41,8 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
         Call the synthesizer (False: actions only).
     progress : bool, optional
         Show a progress bar (default: when stderr is a terminal).
+    engine : str
+        Synthesis engine that plays (:func:`synth.engines.engine_names`; default ``modal``).
 
     Returns
     -------
@@ -65,8 +67,8 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
         rendered = PartRender(index, str(part["part_name"].iloc[0]), name, perf)
         if synth is not None:
             rendered.audio = np.asarray(
-                synth(perf.actions, instrument=name, sample_rate=sample_rate, seed=seed,
-                      progress=show and len(parts) == 1),
+                synth(perf.actions, instrument=name, engine=engine, sample_rate=sample_rate,
+                      seed=seed, progress=show and len(parts) == 1),
                 dtype=np.float32)
         result.parts.append(rendered)
     if synth is not None:

@@ -27,6 +27,7 @@ import pandas as pd
 
 from data_schemas.actions import ACTIONS
 from data_schemas.errors import ParameterError
+from data_schemas.instruments import finger_ratio, instrument_facts, limits
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
 from pipelines.methods.result import PartRender, RenderResult, mix
@@ -34,8 +35,8 @@ from pipelines.perform.events import Event, Performance
 from pipelines.perform.rules import fermata_warp
 from pipelines.score.select import choose_parts
 
-#: Violin open-string length (m): effective string lengths are violin-equivalent.
-VIOLIN_STRING_LENGTH = 0.325
+#: Effective string lengths of targets are violin-equivalent (the database holds violin takes).
+VIOLIN = instrument_facts("violin")
 #: Staccato notes shorter than this (s) are played spiccato (off the string).
 SPICCATO_BELOW = 0.2
 
@@ -156,12 +157,12 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.Da
     pitch = notes["midi_pitch"].to_numpy()
     top_pitch = np.array([int(pitch[e.rows].max()) for e in bowed])
     semis = np.array([e.semitones[-1] for e in bowed])
-    fr = np.clip(1.0 - 2.0 ** (-semis / 12.0), 0.0, 0.8)
+    fr = np.clip(finger_ratio(semis), 0.0, limits().max_finger_ratio)
     direction = np.where(np.array([e.direction for e in bowed]) < 0, "up", "down")
     frame = pd.DataFrame({
         "onset": t0, "duration": np.maximum(duration, 1e-3), "midi_pitch": top_pitch,
         "string": [e.strings[-1] for e in bowed], "finger_ratio": fr,
-        "effective_string_length": VIOLIN_STRING_LENGTH * (1.0 - fr),
+        "effective_string_length": VIOLIN.effective_length(fr),
         "dynamic": np.clip([e.dynamic for e in bowed], 0.0, 9.0), "technique": tech,
         "bow_direction": direction, "slur_position": slur, "run_position": run})
     frame["group"] = (frame["technique"] + "-" + frame["bow_direction"] + "-"
@@ -185,7 +186,7 @@ def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
         if e.pizz:
             for j, (s, semis) in enumerate(zip(e.strings, e.semitones, strict=True)):
                 t = e.t0 + 0.01 * j
-                fr = min(1.0 - 2.0 ** (-semis / 12.0), 0.8)
+                fr = min(float(finger_ratio(semis)), limits().max_finger_ratio)
                 frames.append(pd.DataFrame({
                     "time": [t, max(e.end - 1e-3, t)], "string": s, "finger_ratio": fr,
                     "bow_force": 0.0, "bow_velocity": 0.0, "beta": 0.12, "bow_position": 0.5,
@@ -198,7 +199,7 @@ def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
             if rows.empty:
                 continue
             rows["string"] = s
-            rows["finger_ratio"] = min(1.0 - 2.0 ** (-semis / 12.0), 0.8)
+            rows["finger_ratio"] = min(float(finger_ratio(semis)), limits().max_finger_ratio)
             lift = rows.iloc[[0, -1]].copy()
             lift["time"] = [max(float(rows["time"].iloc[0]) - 1e-3, 0.0),
                             float(rows["time"].iloc[-1]) + 1e-3]
@@ -280,7 +281,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
                     config: dict[str, Any] | None = None, seed: int = 0,
                     sample_rate: int = 44100, transpose_octaves: bool = False,
                     audio: bool = True, diagnostics: bool = False,
-                    progress: bool | None = None) -> RenderResult:
+                    progress: bool | None = None, engine: str = "modal") -> RenderResult:
     """Play the chosen parts with gestures sampled from a database.
 
     Parameters
@@ -311,6 +312,8 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
         Keep the instrument's contact diagnostics per part (for the evaluation).
     progress : bool, optional
         Progress bar (default: when stderr is a terminal).
+    engine : str
+        Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
 
     Returns
     -------
@@ -343,7 +346,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
                                  transpose_octaves=transpose_octaves)
         if audio:
             _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,
-                  diagnostics=diagnostics)
+                  diagnostics=diagnostics, engine=engine)
         result.parts.append(rendered)
     if audio:
         result.audio = mix([p.audio for p in result.parts])
@@ -371,7 +374,7 @@ def _sampled_part(part: pd.DataFrame, index: int, database: SamplingDatabase,
 
 
 def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: int, seed: int,
-          diagnostics: bool) -> None:
+          diagnostics: bool, engine: str = "modal") -> None:
     """Synthesize a sampled part in place: open loop, or with ``models`` correcting the force.
 
     Closed loop, the part's performance becomes what was played (the sampled actions are
@@ -380,7 +383,7 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
     perf = part.performance
     if models is not None:
         y, played, diag = correct_force(perf, models, instrument=part.instrument,
-                                        sample_rate=sample_rate, seed=seed)
+                                        sample_rate=sample_rate, seed=seed, engine=engine)
         part.audio = y
         part.extras["sampled_actions"] = perf.actions
         part.performance = Performance(played, perf.events, perf.warnings)
@@ -388,7 +391,7 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
         return
     from synth import render_with_diagnostics
 
-    y, diag = render_with_diagnostics(perf.actions, instrument=part.instrument,
+    y, diag = render_with_diagnostics(perf.actions, instrument=part.instrument, engine=engine,
                                       sample_rate=sample_rate, seed=seed,
                                       diagnostics=diagnostics)
     part.audio = np.asarray(y, np.float32)
@@ -443,7 +446,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
                              "48000 Hz")
     if not Path(models_dir).is_dir():
         raise ParameterError(f"--models {models_dir}: no such directory (train models with "
-                             "arco train, or play open loop with --no-feedback)")
+                             "arco train, or play open loop with --method sampling-open)")
     plan, span = hop_plan(perf, load_config(), instrument, sample_rate=sample_rate)
     models = load_models(models_dir, instrument)
     n, n_strings = plan.bowed.shape

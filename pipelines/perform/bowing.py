@@ -16,13 +16,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from data_schemas.bow import BowBudget
+from data_schemas.instruments import finger_ratio, limits
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Event
-from pipelines.perform.instruments import finger_ratio
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
             "bow_position", "pluck")
-_MAX_FINGER = 0.8  # the actions table's limit (about 28 semitones)
+_MAX_FINGER = limits().max_finger_ratio  # the actions table's limit (about 28 semitones)
 _TICK = 0.0005  # s between a frame and its neighbour that changes finger or lifts the bow
 
 
@@ -135,8 +136,24 @@ def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
     """
     bow = config["bow"]
     dt = config["frames"]["interval"]
-    amax = bow["max_acceleration"]
-    margin = bow["margin"]
+    budget = BowBudget(bow_length, bow["margin"])
+    strokes = []
+    for idx in _stroke_groups(events):
+        t = _stroke_grid(events, idx, dt)
+        speed = limit_acceleration(t, _target_speed(events, idx, t, config),
+                                   bow["max_acceleration"])
+        travel = float(budget.travel(np.trapezoid(speed, t)))
+        strokes.append(Stroke(idx, events[idx[0]].direction, t, speed, np.zeros_like(t),
+                              travel))
+    squeezed = _place_strokes(strokes, events, config, budget)
+    if squeezed and warnings is not None:
+        warnings.append(f"{squeezed} strokes were slowed below "
+                        f"{bow['min_speed_scale']:.2f} x their speed to fit the bow")
+    return strokes
+
+
+def _stroke_groups(events: list[Event]) -> list[list[int]]:
+    """Indices of the bowed events of each stroke (consecutive, one direction, continued)."""
     groups: list[list[int]] = []
     for k, e in enumerate(events):
         if e.pizz:
@@ -146,13 +163,16 @@ def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
             groups[-1].append(k)
         else:
             groups.append([k])
-    strokes = []
-    for idx in groups:
-        t = _stroke_grid(events, idx, dt)
-        speed = limit_acceleration(t, _target_speed(events, idx, t, config), amax)
-        travel = float(np.trapezoid(speed, t)) / bow_length
-        strokes.append(Stroke(idx, events[idx[0]].direction, t, speed, np.zeros_like(t),
-                              travel))
+    return groups
+
+
+def _place_strokes(strokes: list[Stroke], events: list[Event], config: dict[str, Any],
+                   budget: BowBudget) -> int:
+    """Place the strokes on the bow, in order, scaling their speed to fit the budget.
+
+    Returns the number of strokes slowed below ``bow.min_speed_scale``.
+    """
+    bow = config["bow"]
     regions = config["bow_regions"]
     position: float | None = None
     squeezed = 0
@@ -161,54 +181,50 @@ def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
         d = s.direction
         retake = i == 0 or _retake(strokes[i - 1], s, first, bow["retake_gap"])
         if position is None:
-            position = margin if d > 0 else 1.0 - margin
+            position = budget.home(d)
         span = np.inf
         if first.region is not None:
             span = bow["region_span"]
-            centre = regions[first.region]
             half = min(s.travel, span) / 2
-            position = float(np.clip(centre - d * half, margin, 1.0 - margin))
+            position = float(np.clip(regions[first.region] - d * half, *budget.bounds))
         elif retake:
-            position = _fit_start(position, s.travel, d, margin)
-        avail = min((1.0 - margin - position) if d > 0 else (position - margin), span)
-        scale = 1.0
-        if i + 1 < len(strokes) and s.travel > 0:
-            nxt = strokes[i + 1]
-            nfirst = events[nxt.events[0]]
-            if not _retake(s, nxt, nfirst, bow["retake_gap"]) and nfirst.region is None:
-                end = position + d * s.travel
-                avail_next = (1.0 - margin - end) if nxt.direction > 0 else (end - margin)
-                if nxt.travel > avail_next:
-                    scale = min(bow["max_speed_scale"],
-                                (s.travel + nxt.travel - avail_next) / s.travel)
+            position = budget.place(position, s.travel, d)
+        avail = min(budget.ahead(position, d), span)
+        scale = _speed_scale(strokes, i, events, position, budget, bow)
         if s.travel * scale > avail:
             scale = max(avail, 0.0) / s.travel
         if scale != 1.0:
-            s.speed = limit_acceleration(s.t, s.speed * scale, amax)
+            s.speed = limit_acceleration(s.t, s.speed * scale, bow["max_acceleration"])
             s.speed_scale = scale
             s.force_scale = float(np.sqrt(np.clip(scale, 0.1, 2.0)))
             if scale < bow["min_speed_scale"]:
                 squeezed += 1
         run = np.concatenate([[0.0], np.cumsum(np.diff(s.t) * (s.speed[1:] + s.speed[:-1]) / 2)])
-        s.position = np.clip(position + d * run / bow_length, 0.0, 1.0)
-        s.travel = float(run[-1] / bow_length)
+        s.position = np.clip(position + d * budget.travel(run), 0.0, 1.0)
+        s.travel = float(budget.travel(run[-1]))
         position = float(s.position[-1])
-    if squeezed and warnings is not None:
-        warnings.append(f"{squeezed} strokes were slowed below "
-                        f"{bow['min_speed_scale']:.2f} x their speed to fit the bow")
-    return strokes
+    return squeezed
+
+
+def _speed_scale(strokes: list[Stroke], i: int, events: list[Event], position: float,
+                 budget: BowBudget, bow: dict[str, Any]) -> float:
+    """Speed-up of stroke ``i`` that leaves room for a longer next stroke (no retake)."""
+    s = strokes[i]
+    if i + 1 >= len(strokes) or s.travel <= 0:
+        return 1.0
+    nxt = strokes[i + 1]
+    nfirst = events[nxt.events[0]]
+    if _retake(s, nxt, nfirst, bow["retake_gap"]) or nfirst.region is not None:
+        return 1.0
+    avail_next = budget.ahead(position + s.direction * s.travel, nxt.direction)
+    if nxt.travel > avail_next:
+        return min(bow["max_speed_scale"], (s.travel + nxt.travel - avail_next) / s.travel)
+    return 1.0
 
 
 def _retake(prev: Stroke, s: Stroke, first: Event, gap: float) -> bool:
     """Whether the bow may be lifted and re-placed between two strokes."""
     return (first.t0 - prev.stop) >= gap or prev.direction == s.direction
-
-
-def _fit_start(position: float, travel: float, direction: int, margin: float) -> float:
-    """Move the starting point (during a retake) just enough for the stroke to fit."""
-    if direction > 0:
-        return min(position, max(margin, 1.0 - margin - travel))
-    return max(position, min(1.0 - margin, margin + travel))
 
 
 def _force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float) -> np.ndarray:

@@ -1,7 +1,10 @@
 """The performance-rules configuration: shipped TOML defaults, validated, overridable.
 
-The defaults live in ``pipelines/config/rules.toml`` (package data). A user file given with
-``--config`` is merged over them key by key, so it may hold only what it changes.
+The defaults live in ``pipelines/perform/rules.toml`` (package data), plus what the
+instrument facts (:mod:`data_schemas.instruments`) already say: the dynamics table
+(``[dynamics]``, the facts' bow lanes), each instrument's ``bow_length`` and the bow's
+``max_acceleration``. A user file given with ``--config`` is merged over them key by key, so
+it may hold only what it changes (including those three).
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from data_schemas.errors import ParameterError
+from data_schemas.instruments import INSTRUMENT_NAMES, dynamics_table, instrument_facts, limits
 
 _N_LEVELS = 10
 
@@ -24,8 +28,19 @@ _N_LEVELS = 10
 def default_config() -> dict[str, Any]:
     """Return the shipped rules configuration (loaded once, validated)."""
     text = resources.files("pipelines").joinpath("perform/rules.toml").read_text("utf-8")
-    config = tomllib.loads(text)
-    validate_config(config, source="pipelines/config/rules.toml")
+    config = _with_facts(tomllib.loads(text))
+    validate_config(config, source="pipelines/perform/rules.toml")
+    return config
+
+
+def _with_facts(config: dict[str, Any]) -> dict[str, Any]:
+    """Add the defaults that the instrument facts hold (dynamics, bow length, acceleration)."""
+    lanes = dynamics_table("bow_lanes")
+    config["dynamics"] = {"beta": list(lanes.beta), "velocity": list(lanes.velocity),
+                          "force": list(lanes.force)}
+    for name in INSTRUMENT_NAMES:
+        config["instruments"][name]["bow_length"] = instrument_facts(name).bow_length
+    config["bow"]["max_acceleration"] = limits().max_bow_acceleration
     return config
 
 

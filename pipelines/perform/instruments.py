@@ -1,83 +1,47 @@
-"""Violin, viola and cello: tunings, ranges, and the choice of string and finger.
+"""Violin, viola and cello in a score: which instrument, range folding, string and finger.
 
-Strings are counted from 0 = the lowest string. A stopped note's finger position is given in
-semitones above the open string; the actions table wants ``finger_ratio = 1 - 2**(-s/12)``.
+The instruments' facts (tunings, ranges, bow) are :mod:`data_schemas.instruments`'s
+:class:`~data_schemas.instruments.InstrumentFacts`. Strings are counted from 0 = the lowest
+string. A stopped note's finger position is given in semitones above the open string; the
+actions table wants :func:`data_schemas.instruments.finger_ratio` of it.
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from data_schemas.errors import ParameterError
+from data_schemas.instruments import InstrumentFacts, instrument_facts
 from pipelines.score.errors import ScoreError
 
 
-@dataclass(frozen=True)
-class Instrument:
-    """Constants of one member of the violin family.
+def string_index(instrument: InstrumentFacts, name: str) -> int | None:
+    """Return the index of string ``name`` (a letter, solfège syllable or I..IV), or None.
 
-    Attributes
-    ----------
-    name : str
-        ``violin``, ``viola`` or ``cello``.
-    open_strings : tuple of int
-        MIDI pitches of the open strings, lowest first.
-    string_names : tuple of str
-        Letter names of the strings, lowest first.
-    highest : int
-        Highest playable (stopped) MIDI pitch.
-    bow_length : float, m
-        Usable length of the bow hair.
+    Examples
+    --------
+    >>> violin = instrument_facts("violin")
+    >>> string_index(violin, "III"), string_index(violin, "e"), string_index(violin, "x")
+    (1, 3, None)
     """
+    key = name.strip().lower().rstrip(".")
+    key = {"do": "c", "re": "d", "mi": "e", "sol": "g", "la": "a"}.get(key, key)
+    roman = {"i": 3, "ii": 2, "iii": 1, "iv": 0}
+    if key in roman:
+        return roman[key]
+    for i, letter in enumerate(instrument.string_names):
+        if letter.lower() == key:
+            return i
+    return None
 
-    name: str
-    open_strings: tuple[int, ...]
-    string_names: tuple[str, ...]
-    highest: int
-    bow_length: float
-
-    @property
-    def lowest(self) -> int:
-        """Lowest playable MIDI pitch (the open lowest string)."""
-        return self.open_strings[0]
-
-    def string_index(self, name: str) -> int | None:
-        """Return the index of string ``name`` (a letter, solfège syllable or I..IV)."""
-        key = name.strip().lower().rstrip(".")
-        key = {"do": "c", "re": "d", "mi": "e", "sol": "g", "la": "a"}.get(key, key)
-        roman = {"i": 3, "ii": 2, "iii": 1, "iv": 0}
-        if key in roman:
-            return roman[key]
-        for i, letter in enumerate(self.string_names):
-            if letter.lower() == key:
-                return i
-        return None
-
-
-INSTRUMENTS: dict[str, Instrument] = {
-    "violin": Instrument("violin", (55, 62, 69, 76), ("G", "D", "A", "E"), 100, 0.65),
-    "viola": Instrument("viola", (48, 55, 62, 69), ("C", "G", "D", "A"), 93, 0.67),
-    "cello": Instrument("cello", (36, 43, 50, 57), ("C", "G", "D", "A"), 84, 0.62),
-}
 
 _NAME_PATTERNS = (
     (r"viol(on)?cell|\bvc\b|\bvlc\b|cello|\bvcl\b", "cello"),
     (r"viola|\bvla\b|\bva\b|bratsche|alto", "viola"),
     (r"violin|\bvln?\b|\bvn\b|violon|geige|\bvl\b", "violin"),
 )
-
-
-def get_instrument(name: str) -> Instrument:
-    """Return the :class:`Instrument` called ``name`` (violin, viola or cello)."""
-    try:
-        return INSTRUMENTS[name]
-    except KeyError:
-        raise ParameterError(
-            f"instrument={name!r} is not one of {sorted(INSTRUMENTS)}") from None
 
 
 def guess_instrument(names: list[str], pitches: np.ndarray | None = None) -> str:
@@ -101,28 +65,12 @@ def guess_instrument(names: list[str], pitches: np.ndarray | None = None) -> str
             return name
     if pitches is not None and len(pitches):
         low = float(np.min(pitches))
-        if low >= INSTRUMENTS["violin"].lowest:
+        if low >= instrument_facts("violin").lowest:
             return "violin"
-        if low >= INSTRUMENTS["viola"].lowest:
+        if low >= instrument_facts("viola").lowest:
             return "viola"
         return "cello"
     return "violin"
-
-
-def finger_ratio(semitones: np.ndarray) -> np.ndarray:
-    """Fraction of the string length removed by the finger.
-
-    Parameters
-    ----------
-    semitones : np.ndarray [shape=(n,)], semitones
-        Finger position above the open string (0 = open).
-
-    Returns
-    -------
-    np.ndarray [shape=(n,)], 1
-        ``1 - 2**(-semitones/12)``.
-    """
-    return 1.0 - 2.0 ** (-np.asarray(semitones, dtype=np.float64) / 12.0)
 
 
 def _where(notes: pd.DataFrame, i: int) -> str:
@@ -131,7 +79,7 @@ def _where(notes: pd.DataFrame, i: int) -> str:
     return f"{row['source_file']}: part {name!r}, measure {row['measure']}"
 
 
-def fit_range(notes: pd.DataFrame, instrument: Instrument, *,
+def fit_range(notes: pd.DataFrame, instrument: InstrumentFacts, *,
               transpose_octaves: bool = False) -> pd.DataFrame:
     """Check (or fold by octaves) the pitches of a part into the instrument's range.
 
@@ -139,7 +87,7 @@ def fit_range(notes: pd.DataFrame, instrument: Instrument, *,
     ----------
     notes : pandas.DataFrame
         Notes of one part (notes table columns).
-    instrument : Instrument
+    instrument : InstrumentFacts
         The instrument playing the part.
     transpose_octaves : bool
         Move out-of-range notes by whole octaves instead of failing.
@@ -172,13 +120,13 @@ def fit_range(notes: pd.DataFrame, instrument: Instrument, *,
     return out
 
 
-def lowest_position_string(pitch: float, instrument: Instrument) -> int:
+def lowest_position_string(pitch: float, instrument: InstrumentFacts) -> int:
     """Return the highest string whose open pitch is at or below ``pitch`` (lowest position)."""
     opens = np.asarray(instrument.open_strings)
     return int(max(np.searchsorted(opens, pitch + 1e-6, side="right") - 1, 0))
 
 
-def choose_strings(notes: pd.DataFrame, instrument: Instrument, *,
+def choose_strings(notes: pd.DataFrame, instrument: InstrumentFacts, *,
                    slur_span: float = 7.0) -> pd.DataFrame:
     """Choose string and finger for every note of one part.
 
@@ -193,7 +141,7 @@ def choose_strings(notes: pd.DataFrame, instrument: Instrument, *,
     ----------
     notes : pandas.DataFrame
         Notes of one part, pitches already in range (see :func:`fit_range`).
-    instrument : Instrument
+    instrument : InstrumentFacts
         The instrument.
     slur_span : float, semitones
         Largest finger position for keeping a slurred group on one string.
@@ -204,42 +152,65 @@ def choose_strings(notes: pd.DataFrame, instrument: Instrument, *,
         Columns ``string`` (int8), ``semitones`` (float64, semitones above the open
         string) and ``rolled`` (bool), indexed like ``notes``.
     """
-    n = len(notes)
     opens = np.asarray(instrument.open_strings, dtype=np.float64)
     pitch = notes["midi_pitch"].to_numpy(dtype=np.float64) + notes["cents"].to_numpy() / 100.0
     string = np.array([lowest_position_string(p, instrument) for p in pitch], dtype=np.int64)
-    fixed = np.zeros(n, bool)
-    rolled = np.zeros(n, bool)
     max_stop = instrument.highest - instrument.open_strings[-1]
+    fixed = _honour_indications(notes, pitch, opens, max_stop, string)
+    rolled = _place_chords(notes, pitch, opens, string, fixed)
+    _keep_slurs_on_one_string(notes, pitch, opens, string, fixed, slur_span)
+    semitones = pitch - opens[string]
+    bad = (semitones > max_stop + 1e-6) | (semitones < -1e-6)
+    if bad.any():  # a chord or slur placement that the hand cannot reach: play it plainly
+        string[bad] = [lowest_position_string(p, instrument) for p in pitch[bad]]
+        semitones = pitch - opens[string]
+    semitones = np.maximum(semitones, 0.0)
+    return pd.DataFrame({"string": string.astype(np.int8), "semitones": semitones,
+                         "rolled": rolled}, index=notes.index)
 
+
+def _honour_indications(notes: pd.DataFrame, pitch: np.ndarray, opens: np.ndarray,
+                        max_stop: float, string: np.ndarray) -> np.ndarray:
+    """Put notes on their indicated string where playable there; return which were placed."""
+    fixed = np.zeros(len(notes), bool)
     indication = notes["string_indication"].to_numpy(dtype=np.float64, na_value=np.nan)
     for i in np.flatnonzero(np.isfinite(indication)):
         s = int(indication[i])
         if 0 <= s < len(opens) and 0 <= pitch[i] - opens[s] + 1e-6 <= max_stop + 2e-6:
             string[i] = s
             fixed[i] = True
+    return fixed
 
+
+def _place_chords(notes: pd.DataFrame, pitch: np.ndarray, opens: np.ndarray,
+                  string: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """Double stops on adjacent strings, other chords rolled; return which notes are rolled."""
+    rolled = np.zeros(len(notes), bool)
     chord_size = notes["chord_size"].to_numpy()
-    onset = notes["onset_beats"].to_numpy()
-    voice = notes["voice"].to_numpy()
-    grace = notes["grace"].to_numpy()
-    if np.any(chord_size > 1):
-        key = pd.Series(list(zip(onset, voice, grace, strict=True)))
-        for _, idx in key.groupby(key).groups.items():
-            idx = np.asarray(idx)
-            if idx.size < 2:
-                continue
-            order = idx[np.argsort(pitch[idx])]
-            pair = _adjacent_pair(pitch[order], opens) if order.size == 2 else None
-            if pair is not None:
-                string[order] = pair
-                fixed[order] = True
-                continue
-            rolled[order] = True
-            used = _distinct_strings(pitch[order], opens)
-            string[order] = used
+    if not np.any(chord_size > 1):
+        return rolled
+    key = pd.Series(list(zip(notes["onset_beats"].to_numpy(), notes["voice"].to_numpy(),
+                             notes["grace"].to_numpy(), strict=True)))
+    for _, idx in key.groupby(key).groups.items():
+        idx = np.asarray(idx)
+        if idx.size < 2:
+            continue
+        order = idx[np.argsort(pitch[idx])]
+        pair = _adjacent_pair(pitch[order], opens) if order.size == 2 else None
+        if pair is not None:
+            string[order] = pair
             fixed[order] = True
+            continue
+        rolled[order] = True
+        string[order] = _distinct_strings(pitch[order], opens)
+        fixed[order] = True
+    return rolled
 
+
+def _keep_slurs_on_one_string(notes: pd.DataFrame, pitch: np.ndarray, opens: np.ndarray,
+                              string: np.ndarray, fixed: np.ndarray, slur_span: float) -> None:
+    """Move each slurred group not yet placed to the highest string that holds it all."""
+    chord_size = notes["chord_size"].to_numpy()
     slur = notes["slur_id"].to_numpy(dtype=np.float64, na_value=np.nan)
     for sid in np.unique(slur[np.isfinite(slur)]):
         idx = np.flatnonzero((slur == sid) & ~fixed & (chord_size == 1))
@@ -250,15 +221,6 @@ def choose_strings(notes: pd.DataFrame, instrument: Instrument, *,
                 if lo >= opens[s] - 1e-6 and hi - opens[s] <= slur_span]
         if fits:
             string[idx] = max(fits)
-
-    semitones = pitch - opens[string]
-    bad = (semitones > max_stop + 1e-6) | (semitones < -1e-6)
-    if bad.any():  # a chord or slur placement that the hand cannot reach: play it plainly
-        string[bad] = [lowest_position_string(p, instrument) for p in pitch[bad]]
-        semitones = pitch - opens[string]
-    semitones = np.maximum(semitones, 0.0)
-    return pd.DataFrame({"string": string.astype(np.int8), "semitones": semitones,
-                         "rolled": rolled}, index=notes.index)
 
 
 def _adjacent_pair(pitches: np.ndarray, opens: np.ndarray) -> np.ndarray | None:
@@ -280,3 +242,7 @@ def _distinct_strings(pitches: np.ndarray, opens: np.ndarray) -> np.ndarray:
         out[j] = max(s, 0)
         nxt = max(s - 1, 0)
     return out
+
+
+__all__ = ["choose_strings", "fit_range", "guess_instrument", "lowest_position_string",
+           "string_index"]

@@ -23,8 +23,9 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.actions import ACTIONS, validate_actions
+from data_schemas.instruments import instrument_facts
 from pipelines.perform.events import Event, Performance
-from pipelines.perform.instruments import choose_strings, fit_range, get_instrument
+from pipelines.perform.instruments import choose_strings, fit_range
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
 _MIN_DURATION = 0.005  # s
@@ -336,7 +337,7 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
         Played events (:func:`build_events`).
     """
     name = instrument or str(notes["instrument"].iloc[0])
-    inst = get_instrument(name)
+    inst = instrument_facts(name)
     notes = notes.sort_values(["onset_beats", "grace", "midi_pitch"],
                               ascending=[True, False, True], kind="stable")
     notes = fit_range(notes.reset_index(drop=True), inst, transpose_octaves=transpose_octaves)

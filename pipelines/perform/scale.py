@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
+from data_schemas.instruments import finger_ratio
 from synth.strings import load_instrument
 
 #: Semitones above the open string of the built-in exercise.
@@ -38,7 +39,7 @@ def scale_actions(instrument: str, *, note_duration: float = 0.45, bow_velocity:
     for s, string in enumerate(constants.strings):
         force = string.reference_force * bow_velocity / 0.3
         for step in SCALE_STEPS:
-            finger = 1.0 - 2.0 ** (-step / 12.0)
+            finger = float(finger_ratio(step))
             for dt, v, f in ((0.0, 0.0, 0.0), (0.05, bow_velocity, force),
                              (note_duration - 0.08, bow_velocity, force),
                              (note_duration - 0.02, 0.0, 0.0)):

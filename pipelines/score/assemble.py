@@ -12,8 +12,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from data_schemas.instruments import instrument_facts
 from data_schemas.notes import ARTICULATIONS, NOTES, validate_notes
-from pipelines.perform.instruments import get_instrument, guess_instrument
+from pipelines.perform.instruments import guess_instrument, string_index
 from pipelines.score.errors import ScoreError
 from pipelines.score.tempo import TempoMap
 from pipelines.score.text import classify
@@ -240,9 +241,9 @@ def _state(onset: np.ndarray, changes: list[tuple[float, object]]) -> list:
 
 
 def _strings(df: pd.DataFrame, directions: dict[str, list], instrument: str) -> list:
-    inst = get_instrument(instrument)
+    inst = instrument_facts(instrument)
     onset = df["onset_beats"].to_numpy()
-    changes = [(b, None if v is None else inst.string_index(str(v)))
+    changes = [(b, None if v is None else string_index(inst, str(v)))
                for b, v in directions["string"]]
     state = _state(onset, changes)
     explicit = df["string_indication"].tolist()

@@ -18,6 +18,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from data_schemas.instruments import finger_ratio, limits
 from synth.controls import BowControl
 from synth.engines import get_engine
 from synth.listening.features import HOP, WINDOW
@@ -32,7 +33,7 @@ from synth.strings import load_instrument
 #: Bowing of the mezzo-forte reference (Vivi's mf lane).
 MF_VELOCITY = 0.33
 MF_BETA = 0.10
-MAX_ACCELERATION = 5.0  # m/s^2
+MAX_ACCELERATION = limits().max_bow_acceleration  # m/s^2, the instrument facts' limit
 
 
 @dataclass(frozen=True)
@@ -49,7 +50,7 @@ class ClipSpec:
     @property
     def finger_ratio(self) -> float:
         """Fraction of the string length removed by the finger."""
-        return float(1.0 - 2.0 ** (-self.semitones / 12.0))
+        return float(finger_ratio(self.semitones))
 
     def nominal_frequency(self) -> float:
         """Nominal frequency of the stopped string, Hz."""

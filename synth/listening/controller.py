@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from data_schemas.instruments import finger_ratio
 from synth.controls import Block, BowControl
 from synth.engines import Engine
 from synth.listening.classifier import PairModel
@@ -343,7 +344,7 @@ class _HopLoop:
                 v *= 1.0 + jitter * noise[self.draw]
                 self.draw += 1
             v = min(max(v, -5.0), 5.0)
-            ratio = 1.0 - 2.0 ** (-semitones[i] / 12.0)
+            ratio = float(finger_ratio(semitones[i]))
             force = ctl.force if planned is None else min(max(planned[i] * ctl.force, 0.0),
                                                           MAX_FORCE)
             controls[s] = BowControl(v, force, self.beta[i], min(ratio, 0.8))

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from gesture_db.build import build_database
-
 
 def register(subparsers) -> None:
     """Add the ``build-db`` sub-command."""
@@ -17,8 +15,10 @@ def register(subparsers) -> None:
                    help="recording files (.parquet/.csv, actions tables, .toml mappings) "
                         "or directories")
     p.add_argument("-o", "--output", required=True, help="database directory")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes")
-    p.add_argument("--scheduler", default=None, help="dask.distributed scheduler address")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: one per CPU; 1 runs in-process)")
+    p.add_argument("--scheduler", default=None,
+                   help="dask.distributed scheduler address (overrides --workers)")
     p.add_argument("--append", action="store_true",
                    help="add recordings to an existing database without rebuilding it")
     p.set_defaults(func=run)
@@ -26,6 +26,8 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Build and print a one-line summary."""
+    from gesture_db.build import build_database
+
     m = build_database(args.recordings, args.output, workers=args.workers,
                        scheduler=args.scheduler, append=args.append)
     seg = m.get("segmentation", {})

@@ -17,7 +17,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "audio players, bowing plots) to the output directory.")
     p.add_argument("scores", nargs="+", metavar="SCORE", help=".musicxml, .mxl or .mid files")
     p.add_argument("--methods", default=DEFAULT_METHODS,
-                   help=f"comma-separated methods (default {DEFAULT_METHODS})")
+                   help="comma-separated methods (arco render --help lists them)")
     p.add_argument("--db", metavar="DB", help="gesture database (sampling methods)")
     p.add_argument("--models", metavar="DIR", help="listening models (feedback, sampling)")
     p.add_argument("--search-config", metavar="SEARCH.toml",
@@ -28,9 +28,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     which.add_argument("--all-parts", action="store_true", help="play every part and mix")
     which.add_argument("--start-measure", type=int, metavar="M", help="first measure")
     which.add_argument("--end-measure", type=int, metavar="M", help="last measure")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--sample-rate", type=int, default=44100, metavar="HZ",
-                   help="audio sample rate (default 44100)")
+                   help="audio sample rate in Hz")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run)
 

@@ -6,15 +6,15 @@ import argparse
 import json
 from pathlib import Path
 
-from gesture_db.info import format_summary, plot_groups, summarize
-from gesture_db.store import GestureDB
-
 
 def register(subparsers) -> None:
     """Add the ``db`` sub-command with its ``info`` action."""
-    p = subparsers.add_parser("db", help="inspect a gesture database")
+    p = subparsers.add_parser("db", help="inspect a gesture database",
+                              description="Inspect a gesture database (arco build-db).")
     sub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    info = sub.add_parser("info", help="summary and a PNG per group of mean contour +- 1 sd")
+    info = sub.add_parser("info", help="summary and a PNG per group of mean contour +- 1 sd",
+                          description="Counts, dimensions, fit errors, segmentation scores "
+                                      "and a PNG per group of mean contour +- 1 sd.")
     info.add_argument("database", help="database directory")
     info.add_argument("--json", action="store_true", help="print JSON")
     info.add_argument("--plots", default=None,
@@ -25,6 +25,9 @@ def register(subparsers) -> None:
 
 def run_info(args: argparse.Namespace) -> int:
     """Print the summary and write the plots."""
+    from gesture_db.info import format_summary, plot_groups, summarize
+    from gesture_db.store import GestureDB
+
     db = GestureDB(args.database)
     summary = summarize(db)
     if not args.no_plots:

@@ -17,21 +17,17 @@ from __future__ import annotations
 
 import argparse
 import time
-from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
+from pipelines.cli.help import RawDescriptionFormatter
+from pipelines.score.bundled import bundled_score
+from synth.strings import INSTRUMENT_NAMES
 
-from data_schemas.actions import write_actions
-from pipelines.audio_io import write_audio
-from pipelines.perform.scale import scale_actions
-from pipelines.reports.plots import plot_bowing
-from synth import INSTRUMENT_NAMES, render_actions
-from synth.playability import yin_pitch
-from synth.strings import load_instrument
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    import numpy as np
 
 SAMPLE_RATE = 44100
-DEMO_SCORE = "mozart-k421.mxl"
 DEMO_MEASURES = (1, 8)
 #: Size of the simulated recording set of the demo (notes, performers).
 DEMO_RECORDINGS = (2000, 3)
@@ -40,18 +36,15 @@ DEMO_RECORDINGS = (2000, 3)
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``demo`` sub-command."""
     p = subparsers.add_parser("demo", help="run the demo pipeline on built-in data",
-                              description=__doc__)
-    p.add_argument("-o", "--output", type=Path, default=Path("out"))
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+                              description=__doc__,
+                              formatter_class=RawDescriptionFormatter)
+    p.add_argument("-o", "--output", type=Path, default=Path("out"),
+                   help="directory for the audio, plots and report")
+    p.add_argument("--seed", type=int, default=0, help="random seed of every step")
+    p.add_argument("--workers", type=int, default=2, help="worker processes")
     p.add_argument("--skip-learning", action="store_true",
                    help="only the instrument and the rules (no database, training, comparison)")
     p.set_defaults(func=run)
-
-
-def bundled_score(name: str = DEMO_SCORE) -> Path:
-    """Path of a score bundled with Arco (``pipelines/data``)."""
-    return Path(str(resources.files("pipelines") / "data" / name))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -70,6 +63,15 @@ def run(args: argparse.Namespace) -> int:
 
 def scales(out: Path, seed: int) -> list[str]:
     """Render the pentachord on every string of each instrument; return report lines."""
+    import numpy as np
+
+    from data_schemas.actions import write_actions
+    from pipelines.audio_io import write_audio
+    from pipelines.perform.scale import scale_actions
+    from pipelines.reports.plots import plot_bowing
+    from synth.render import render_actions
+    from synth.strings import load_instrument
+
     pieces = []
     lines = ["## The instrument", "", "Pentachord (0, 2, 4, 5, 7 semitones) on every string, "
              "detache, beta 0.1, 0.3 m/s, each string's reference force. "
@@ -91,8 +93,11 @@ def scales(out: Path, seed: int) -> list[str]:
 
 def quartet_rules(out: Path, seed: int) -> list[str]:
     """Render the bundled quartet's opening with the rules; return report lines."""
+    from data_schemas.actions import write_actions
+    from pipelines.audio_io import write_audio
     from pipelines.methods.rules import render
     from pipelines.perform.config import load_config
+    from pipelines.reports.plots import plot_bowing
     from pipelines.score import read_score
     from pipelines.score.select import choose_parts, select_measures
 
@@ -171,7 +176,10 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
 
 def _pitch_rows(name: str, audio: np.ndarray, events) -> list[str]:
     """Measure each note's pitch (YIN over its middle) against the equal-tempered target."""
+    import numpy as np
     from music21.pitch import Pitch
+
+    from synth.playability import yin_pitch
 
     rows = []
     for t0, label in zip(events["t0"], events["label"], strict=True):

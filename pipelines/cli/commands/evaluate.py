@@ -8,6 +8,7 @@ import math
 import sys
 
 from data_schemas.errors import ParameterError
+from synth.strings import INSTRUMENT_NAMES
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,7 +25,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--score", metavar="SCORE", help="the score (level targets per dynamic)")
     p.add_argument("--diagnostics", metavar="DIAG.parquet",
                    help="contact diagnostics recorded by the render")
-    p.add_argument("--instrument", default="violin", choices=("violin", "viola", "cello"))
+    p.add_argument("--instrument", default="violin", choices=INSTRUMENT_NAMES,
+                   help="instrument that played (its strings and lanes)")
     p.add_argument("--json", action="store_true", help="print the full JSON")
     p.set_defaults(func=run)
 

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
-import pandas as pd
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    import pandas as pd
 
-from data_schemas.notes import DYNAMIC_LEVELS, write_notes
-
-_LEVEL_NAMES = {int(v): k for k, v in DYNAMIC_LEVELS.items()}
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
 
 
@@ -21,7 +20,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", metavar="NOTES",
                    help="write the notes table here (.parquet or .csv)")
     p.add_argument("--head", type=int, default=8, metavar="N",
-                   help="notes per part to print in the summary (default 8)")
+                   help="notes per part to print in the summary")
     p.set_defaults(func=run)
 
 
@@ -32,6 +31,9 @@ def note_name(midi: int) -> str:
 
 def summary(notes: pd.DataFrame, *, head: int = 8) -> str:
     """A readable summary of a notes table: parts, ranges, durations, first notes."""
+    from data_schemas.notes import DYNAMIC_LEVELS
+
+    level_names = {int(v): k for k, v in DYNAMIC_LEVELS.items()}
     lines = [f"{notes['source_file'].iloc[0]}: {len(notes)} notes, "
              f"{notes['part_index'].nunique()} parts, "
              f"{(notes['onset'] + notes['duration']).max():.1f} s"]
@@ -48,7 +50,7 @@ def summary(notes: pd.DataFrame, *, head: int = 8) -> str:
             f"slurred {int(part['slur_id'].notna().sum())}, pizz "
             f"{int((part['technique'] == 'pizz').sum())}" + (f", {counts}" if counts else ""))
         for _, n in part.head(head).iterrows():
-            level = _LEVEL_NAMES.get(int(round(n["dynamic"])), "?")
+            level = level_names.get(int(round(n["dynamic"])), "?")
             lines.append(
                 f"    m{n['measure']:<4} {n['onset']:8.3f} s {n['duration']:6.3f} s "
                 f"{note_name(int(n['midi_pitch'])):<4} {level:<4} slur {n['slur_position']:<4} "
@@ -58,6 +60,7 @@ def summary(notes: pd.DataFrame, *, head: int = 8) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Read the score; print a summary or write the table."""
+    from data_schemas.notes import write_notes
     from pipelines.score import read_score
 
     notes = read_score(args.score)

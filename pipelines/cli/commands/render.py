@@ -1,4 +1,4 @@
-"""``arco render SCORE [--method rules|feedback|sampling] ... -o out.wav``: play a score."""
+"""``arco render SCORE [--method METHOD] [--engine ENGINE] ... -o out.wav``: play a score."""
 
 from __future__ import annotations
 
@@ -8,16 +8,10 @@ import sys
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
+from pipelines.methods.registry import METHODS, check_methods, get_method
+from synth.engines import DEFAULT_ENGINE, engine_names
+from synth.strings import INSTRUMENT_NAMES
 
-#: Methods of ``arco render`` (``sampling`` plays open loop without models or with
-#: ``--no-feedback``).
-RENDER_METHODS = {
-    "rules": "Vivi's performance rules (notation -> bowing, no learning)",
-    "feedback": "the rules' bowing with the force chosen by the listening controller "
-                "(--models)",
-    "sampling": "gestures sampled from a database (--db), force corrected by the listening "
-                "controller when --models is given",
-}
 #: Where ``arco render`` looks for a database and models when none are named.
 DEFAULT_DB = "db"
 DEFAULT_MODELS = "models"
@@ -25,6 +19,7 @@ DEFAULT_MODELS = "models"
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``render`` sub-command."""
+    methods = "; ".join(f"{name}: {summary}" for name, summary in METHODS.items())
     p = subparsers.add_parser(
         "render", help="render a score to audio (and actions, plot)",
         description="Play SCORE (MusicXML, MXL or MIDI) and write a WAV file, the actions "
@@ -33,19 +28,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "./models), otherwise to rules.")
     p.add_argument("score", metavar="SCORE", help=".musicxml, .xml, .mxl or .mid file")
     p.add_argument("--method", metavar="METHOD", default=None,
-                   help=f"how to play: {', '.join(RENDER_METHODS)}")
-    p.add_argument("--db", metavar="DB", help="gesture database (arco build-db) for sampling")
+                   help=f"how to play ({methods}); default: sampling with a database and "
+                        "models, else rules")
+    p.add_argument("--engine", choices=engine_names(), default=DEFAULT_ENGINE,
+                   help="synthesis engine (arco engines lists them)")
+    p.add_argument("--db", metavar="DB",
+                   help="gesture database (arco build-db) for sampling and sampling-open")
     p.add_argument("--models", metavar="DIR",
                    help="listening models (arco train) for feedback and sampling")
-    p.add_argument("--no-feedback", action="store_true",
-                   help="sampling: play the sampled gestures open loop")
     which = p.add_argument_group("parts")
     which.add_argument("--part", metavar="NAME|INDEX",
                        help="part to play, by name or index from 0 in score order "
                             "(default: the first)")
     which.add_argument("--all-parts", action="store_true",
                        help="play every part on its own instrument and mix them")
-    which.add_argument("--instrument", choices=("violin", "viola", "cello"),
+    which.add_argument("--instrument", choices=INSTRUMENT_NAMES,
                        help="override the part's instrument (single part only)")
     which.add_argument("--start-measure", type=int, metavar="M", help="first measure")
     which.add_argument("--end-measure", type=int, metavar="M", help="last measure")
@@ -53,8 +50,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                        help="fold notes outside the instrument's range by octaves")
     play = p.add_argument_group("performance")
     play.add_argument("--skill", type=int, default=3, metavar="0..3",
-                      help="performer skill: 0 worst .. 3 exact (default 3)")
-    play.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+                      help="performer skill: 0 worst .. 3 exact")
+    play.add_argument("--seed", type=int, default=0, help="random seed")
     play.add_argument("--config", metavar="RULES.toml",
                       help="rules settings merged over the shipped defaults")
     out = p.add_argument_group("output")
@@ -66,7 +63,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="write the instrument's per-hop contact diagnostics (first part)")
     out.add_argument("--plot", metavar="OUT.png", help="plot the bowing (the first part)")
     out.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000),
-                     help="audio sample rate in Hz (default 44100)")
+                     help="audio sample rate in Hz")
     out.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)
 
@@ -74,10 +71,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def choose_method(args: argparse.Namespace) -> str:
     """The method asked for, or sampling when a database and models exist, else rules."""
     if args.method is not None:
-        if args.method not in RENDER_METHODS:
-            raise ParameterError(f"--method {args.method!r} is not available (choose from: "
-                                 f"{', '.join(RENDER_METHODS)})")
-        return args.method
+        return get_method(args.method).name
     db = args.db or (DEFAULT_DB if os.path.isdir(DEFAULT_DB) else None)
     models = args.models or (DEFAULT_MODELS if os.path.isdir(DEFAULT_MODELS) else None)
     if db and models:
@@ -96,55 +90,37 @@ def _check(args: argparse.Namespace, method: str) -> None:
                              "or --plot")
     if args.output and Path(args.output).suffix.lower() not in (".wav", ".flac"):
         raise ParameterError(f"-o {args.output}: use a .wav (or .flac) file")
-    if method == "feedback" and not args.models:
-        raise ParameterError("--method feedback needs --models DIR (listening models from "
-                             "arco train)")
-    if method == "sampling" and not args.db:
-        raise ParameterError("--method sampling needs --db DB (a gesture database from "
-                             "arco build-db)")
-    if args.models and not Path(args.models).is_dir():
-        raise ParameterError(f"--models {args.models}: no such directory")
+    check_methods([method], db=args.db, models=args.models, option="--method")
 
 
 def run(args: argparse.Namespace) -> int:
     """Read, play, write."""
-    from pipelines.methods.registry import render_method
-    from pipelines.perform.config import load_config
-    from pipelines.score import read_score
-    from pipelines.score.select import choose_parts, select_measures
+    from pipelines.methods.render import render_score
 
     method = choose_method(args)
     _check(args, method)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
-    config = load_config(args.config)
-    notes = select_measures(read_score(args.score), args.start_measure, args.end_measure)
-    parts = choose_parts(notes, args.part, args.all_parts)
-    database = None
-    if method == "sampling":
-        from pipelines.methods.sampling import open_database
-
-        database = open_database(args.db)
-    models = None if (method == "sampling" and args.no_feedback) else args.models
-    variant = "sampling-open" if method == "sampling" and models is None else method
-    output = render_method(variant, notes, parts, stem=Path(args.score).stem, config=config,
-                           database=database, models=models, seed=args.seed,
-                           sample_rate=args.sample_rate, instrument=args.instrument,
-                           skill=args.skill, transpose_octaves=args.transpose_octaves,
-                           diagnostics=bool(args.diagnostics),
-                           progress=False if args.quiet else None)
+    output = render_score(args.score, method=method, engine=args.engine,
+                          parts="all" if args.all_parts else args.part,
+                          start_measure=args.start_measure, end_measure=args.end_measure,
+                          seed=args.seed, sample_rate=args.sample_rate,
+                          instrument=args.instrument, skill=args.skill,
+                          transpose_octaves=args.transpose_octaves, config=args.config,
+                          db=args.db, models=args.models, diagnostics=bool(args.diagnostics),
+                          progress=False if args.quiet else None)
     for part in output.parts:
         for warning in part.warnings:
             say(f"arco render: warning: {warning}")
-    _write(args, output, variant, say)
+    _write(args, output, method, say)
     return 0
 
 
 def _write(args: argparse.Namespace, output, variant: str, say) -> None:
     from data_schemas.actions import write_actions
     from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
+    from data_schemas.instruments import instrument_facts
     from data_schemas.io import write_table
     from pipelines.audio_io import write_audio
-    from pipelines.perform.instruments import get_instrument
     from pipelines.reports.plots import plot_bowing
 
     if args.output:
@@ -163,7 +139,7 @@ def _write(args: argparse.Namespace, output, variant: str, say) -> None:
         write_table(first.diagnostics, args.diagnostics, CONTACT_DIAGNOSTICS)
         say(f"wrote {args.diagnostics}")
     if args.plot:
-        names = get_instrument(first.instrument).string_names
+        names = instrument_facts(first.instrument).string_names
         plot_bowing(first.actions, first.events, args.plot,
                     title=f"{Path(args.score).name}: {first.part_name} ({first.instrument}), "
                           f"{variant}, skill {args.skill}", string_names=names)

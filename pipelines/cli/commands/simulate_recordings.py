@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from gesture_db.simulate import simulate_recordings
-
 
 def register(subparsers) -> None:
     """Add the ``simulate-recordings`` sub-command."""
@@ -14,19 +12,27 @@ def register(subparsers) -> None:
         description="Play recording scripts (scales and exercises over articulations, five "
                     "dynamics, contexts and four strings) with simulated performers; write "
                     "one recording and one annotation (with true boundaries) per take.")
-    p.add_argument("--notes", type=int, default=10000, help="total notes (default 10000)")
-    p.add_argument("--performers", type=int, default=3, help="performer styles (default 3)")
+    p.add_argument("--notes", type=int, default=10000, help="total notes")
+    p.add_argument("--performers", type=int, default=3, help="performer styles")
     p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--notes-per-take", type=int, default=500, help="notes per take file")
     p.add_argument("--frame-rate", type=float, default=240.0, help="frames/s, 200-240")
+    p.add_argument("--performers-config", metavar="FILE",
+                   help="TOML file of [[performer]] styles (name plus the fields that differ "
+                        "from gesture_db/config/simulate.toml's [performer_defaults]) to use "
+                        "instead of the shipped ones")
     p.add_argument("-o", "--output", required=True, help="output directory")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Simulate and report the files written."""
+    from gesture_db.simulate import simulate_recordings
+    from gesture_db.simulate_config import load_performers
+
+    bases = load_performers(args.performers_config) if args.performers_config else None
     paths = simulate_recordings(args.notes, args.performers, args.output, seed=args.seed,
                                 notes_per_take=args.notes_per_take,
-                                frame_rate=args.frame_rate, progress=True)
+                                frame_rate=args.frame_rate, performers=bases, progress=True)
     print(f"wrote {len(paths)} takes ({args.notes} notes) to {args.output}")
     return 0

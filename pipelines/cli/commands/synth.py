@@ -6,10 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from data_schemas.actions import read_actions
 from data_schemas.errors import ParameterError
-from pipelines.audio_io import write_audio
-from synth import INSTRUMENT_NAMES, render_actions
+from synth.engines import DEFAULT_ENGINE, engine_names
+from synth.strings import INSTRUMENT_NAMES
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -19,13 +18,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("actions", type=Path, help="actions table, .parquet or .csv")
     p.add_argument("-o", "--output", type=Path, required=True,
                    help="audio file to write (.wav or .flac)")
-    p.add_argument("--instrument", choices=INSTRUMENT_NAMES, default="violin")
+    p.add_argument("--instrument", choices=INSTRUMENT_NAMES, default="violin",
+                   help="instrument that plays")
+    p.add_argument("--engine", choices=engine_names(), default=DEFAULT_ENGINE,
+                   help="synthesis engine (arco engines lists them)")
     p.add_argument("--seed", type=int, default=0, help="seed of the friction noise")
-    p.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000))
+    p.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000),
+                   help="audio sample rate in Hz")
     p.add_argument("--oversample", type=int, choices=(1, 2, 4), default=None,
-                   help="internal oversampling (default 2)")
+                   help="internal oversampling of the modal engine (default 2)")
     p.add_argument("--body", default="synthesized",
-                   help="'synthesized' (default), 'none', or a WAV impulse response")
+                   help="body impulse response: 'synthesized', 'none', or a WAV file")
     p.add_argument("--body-seed", type=int, default=0,
                    help="which synthesized body (an instrument keeps its body across seeds)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -34,13 +37,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, render and write."""
+    from data_schemas.actions import read_actions
+    from pipelines.audio_io import write_audio
+    from synth.render import render_actions
+
     actions = read_actions(args.actions)
     if actions.empty:
         raise ParameterError(f"{args.actions}: the actions table has no rows")
     body = None if args.body == "none" else args.body
-    audio = render_actions(actions, instrument=args.instrument, sample_rate=args.sample_rate,
-                           seed=args.seed, oversample=args.oversample, body=body,
-                           body_seed=args.body_seed,
+    audio = render_actions(actions, instrument=args.instrument, engine=args.engine,
+                           sample_rate=args.sample_rate, seed=args.seed,
+                           oversample=args.oversample, body=body, body_seed=args.body_seed,
                            progress=not args.quiet and sys.stderr.isatty())
     write_audio(args.output, audio, args.sample_rate)
     print(f"wrote {args.output} ({audio.size / args.sample_rate:.2f} s, {args.instrument})")

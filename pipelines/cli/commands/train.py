@@ -7,6 +7,7 @@ import sys
 from dataclasses import replace
 
 from data_schemas.errors import ParameterError
+from synth.strings import INSTRUMENT_NAMES
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -16,12 +17,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Per string x dynamic: basic training (judged clips), an SVM classifier "
                     "(10-fold CV accuracy), the force factor K and the initial forces. Pairs "
                     "run in parallel; a rerun resumes, keeping finished pairs.")
-    p.add_argument("--instrument", default="violin", choices=("violin", "viola", "cello"))
+    p.add_argument("--instrument", default="violin", choices=INSTRUMENT_NAMES,
+                   help="instrument whose string x dynamic pairs are trained")
     p.add_argument("--teacher", default="auto", choices=("auto", "human", "both"),
                    help="who judges the clips (human labels override automatic ones)")
     p.add_argument("--labels", metavar="LABELS.parquet", help="human labels (labels table)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="model directory")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: one per CPU)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="dask.distributed scheduler address (pairs run on its workers)")
     p.add_argument("--pairs", default=None, metavar="S:DYN,...",
@@ -32,7 +35,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--listening-config", metavar="LISTENING.toml",
                    help="control law and teacher thresholds (default: "
                         "synth/listening/config/listening.toml)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0,
+                   help="random seed")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 

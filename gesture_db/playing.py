@@ -1,0 +1,335 @@
+"""The simulated violinist plays a recording script: bowing signals and ground truth.
+
+:func:`play_script` turns a script (:func:`gesture_db.script.recording_script`) into a
+recording and its annotation, with
+
+- contours per technique (``../shared/reference/gestures.md``): detache, legato, staccato,
+  spiccato (one bounce per note, force 0 between notes) and martele (force before motion);
+- bow changes that reverse the velocity with a realistic acceleration (6-30 m/s^2);
+- bow planning inside the violin's bow hair (runs scaled down to fit the bow-travel budget
+  :class:`data_schemas.bow.BowBudget`, retakes in rests with the bow lifted);
+- context effects (slur and run position, tempo, note length) and vibrato;
+- performer styles, trial-to-trial variability, timing deviations and sensor noise.
+
+Every random draw comes from a :class:`numpy.random.Generator`. The exact boundaries played
+go into the annotation's ``true_onset`` / ``true_offset``; its ``onset`` / ``offset`` carry a
+coarse-alignment error of tens of milliseconds, as a score-to-recording alignment would.
+The constants are ``gesture_db/config/simulate.toml``'s; the strokes are
+:mod:`gesture_db.strokes`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.annotation import validate_annotation
+from data_schemas.bow import BowBudget
+from data_schemas.instruments import dynamics_table, finger_ratio, instrument_facts, limits
+from data_schemas.recording import RECORDING_FRAME_RATE, validate_recording
+from gesture_db.script import INSTRUMENT
+from gesture_db.simulate_config import Performer, simulator_config
+from gesture_db.strokes import stroke
+
+Slicer = Callable[[float, float], slice]
+
+
+def play_script(script: pd.DataFrame, performer: Performer, rng: np.random.Generator, *,
+                frame_rate: float = RECORDING_FRAME_RATE,
+                recording_id: str = "take") -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Play a recording script.
+
+    Parameters
+    ----------
+    script : pandas.DataFrame
+        From :func:`gesture_db.script.recording_script` (needs ``run``, ``duration``,
+        ``rest_after``, ``midi_pitch``, ``string``, ``finger_ratio``, ``dynamic``,
+        ``technique``, ``slur_position``, ``run_position``).
+    performer : Performer
+        Style.
+    rng : numpy.random.Generator
+        Random source.
+    frame_rate : float
+        Frames per second, 200-240 Hz.
+    recording_id : str
+        Take identifier written to both tables.
+
+    Returns
+    -------
+    recording : pandas.DataFrame
+        The :data:`data_schemas.recording.RECORDING` frames.
+    annotation : pandas.DataFrame
+        The :data:`data_schemas.annotation.ANNOTATION` rows with ground truth.
+    """
+    plan = _plan_notes(script, performer, rng)
+    total = float(plan["stop"].max()) + 1.0
+    t = np.arange(0.0, total, 1.0 / frame_rate)
+    sig = _render(plan, performer, rng, t)
+    rec = _add_noise(sig, rng)
+    rec["recording_id"] = recording_id
+    rec["time"] = t
+    recording = validate_recording(pd.DataFrame(rec), source=recording_id)
+    annotation = _annotation(plan, performer, rng, recording_id)
+    return recording, annotation
+
+
+def _plan_notes(script: pd.DataFrame, perf: Performer, rng: np.random.Generator) -> pd.DataFrame:
+    """True timing, bow directions and per-note magnitudes."""
+    plan = script.reset_index(drop=True).copy()
+    timing = _timing(plan, perf, rng)
+    plan = plan.assign(**timing)
+    plan = plan.assign(**_magnitudes(plan, perf, rng))
+    # true offsets: the next onset inside a run, the end of bow motion at a run's end
+    plan["true_offset"] = np.where(plan["run_end"].to_numpy(), plan["stop"].to_numpy(),
+                                   plan["nxt"].to_numpy())
+    return plan
+
+
+def _timing(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator) -> dict:
+    """Onsets, durations, ends of bow motion and bow directions of every note."""
+    cfg = simulator_config()["timing"]
+    n = len(plan)
+    tech = plan["technique"].to_numpy()
+    dur = plan["duration"].to_numpy() * perf.tempo_scale
+    on = np.empty(n)
+    true_dur = dur * np.exp(rng.normal(0.0, perf.ioi_sd, n))
+    true_dur = np.maximum(true_dur, cfg["min_duration_share"] * dur)
+    rest = plan["rest_after"].to_numpy() * perf.tempo_scale
+    tcur = cfg["start"]
+    for i in range(n):
+        on[i] = tcur
+        tcur += true_dur[i] + rest[i] * float(np.exp(rng.normal(0, cfg["rest_sd"])))
+    run = plan["run"].to_numpy()
+    run_end = np.r_[run[1:] != run[:-1], True]
+    nxt = np.r_[on[1:], np.inf]
+    # end of bow motion of each note
+    fill = np.clip(perf.staccato_fill * np.exp(rng.normal(0, cfg["fill_sd"], n)),
+                   *cfg["fill_range"])
+    stop = np.where(run_end, on + true_dur * rng.uniform(*cfg["run_end_fill"], n), nxt)
+    stop = np.where(tech == "staccato", on + fill * true_dur, stop)
+    stop = np.where(tech == "martele", on + np.clip(fill + cfg["martele_extra_fill"],
+                                                    *cfg["martele_fill_range"]) * true_dur,
+                    stop)
+    stop = np.where((tech == "spiccato") & run_end, on + true_dur * cfg["spiccato_end_fill"],
+                    stop)
+    # bow directions: one stroke per note, one per slur for legato; alternate per exercise
+    new_stroke = (tech != "legato") | plan["slur_position"].isin(["init", "iso"]).to_numpy()
+    ex = plan["exercise"].to_numpy()
+    direction = np.empty(n)
+    d = 1.0
+    for i in range(n):
+        if i == 0 or ex[i] != ex[i - 1]:
+            d = 1.0
+        elif new_stroke[i]:
+            d = -d
+        direction[i] = d
+    return dict(on=on, true_dur=true_dur, stop=stop, nxt=nxt, run_end=run_end,
+                direction=direction, fill=fill, new_stroke=new_stroke)
+
+
+def _magnitudes(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator) -> dict:
+    """Velocity, force, beta and bow-change acceleration of every note."""
+    cfg = simulator_config()["magnitudes"]
+    n = len(plan)
+    tech = plan["technique"].to_numpy()
+    true_dur = plan["true_dur"].to_numpy()
+    fill = plan["fill"].to_numpy()
+    v, f, b = dynamics_table("violinist").at(plan["dynamic"].to_numpy())
+    var = perf.variability
+    length_factor = np.clip((cfg["length_reference"] / true_dur) ** cfg["length_exponent"],
+                            *cfg["length_factor_range"])
+    tech_v = pd.Series(tech).map(cfg["technique_velocity"]).to_numpy()
+    vel = v * perf.velocity_scale * length_factor * tech_v * np.exp(rng.normal(0, var, n))
+    # a staccato / spiccato burst cannot exceed the acceleration the arm can give
+    burst = np.where(tech == "staccato", fill * true_dur, true_dur)
+    limit = np.where(np.isin(tech, ("staccato", "spiccato")),
+                     cfg["burst_acceleration"] * burst / np.pi, np.inf)
+    vel = np.minimum(vel, limit)
+    fr = plan["finger_ratio"].to_numpy()
+    force = f * perf.force_scale * np.exp(rng.normal(0, var, n))
+    slur = plan["slur_position"].to_numpy()
+    lean = cfg["slur_force"]
+    force *= np.where(slur == "init", lean["init"], np.where(slur == "end", lean["end"], 1.0))
+    beta = b * perf.beta_scale * np.exp(rng.normal(0, var, n)) / np.sqrt(1.0 - fr)
+    accel = np.clip(perf.accel * np.exp(rng.normal(0, cfg["accel_sd"], n)), *cfg["accel_range"])
+    accel = np.where(tech == "martele",
+                     np.clip(perf.martele_accel * np.exp(rng.normal(0, cfg["martele_accel_sd"],
+                                                                    n)),
+                             *cfg["martele_accel_range"]),
+                     accel)
+    return dict(vel=vel, force=force, beta=np.clip(beta, *cfg["beta_range"]), accel=accel)
+
+
+def _slicer(t: np.ndarray) -> Slicer:
+    """``sl(a, b)``: the frames of ``t`` (a uniform grid from 0) in [a, b)."""
+    fs = 1.0 / (t[1] - t[0])
+    n_frames = t.size
+
+    def sl(a: float, b: float) -> slice:
+        return slice(max(int(np.ceil(a * fs)), 0), min(int(np.ceil(b * fs)), n_frames))
+
+    return sl
+
+
+def _render(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator,
+            t: np.ndarray) -> dict[str, np.ndarray]:
+    """Noise-free signals on the frame grid ``t``."""
+    fs = 1.0 / (t[1] - t[0])
+    sl = _slicer(t)
+    v = np.zeros(t.size)
+    force = np.zeros(t.size)
+    tech = plan["technique"].to_numpy()
+    run = plan["run"].to_numpy()
+    n = len(plan)
+    # ---- velocity and force, stroke by stroke
+    i = 0
+    while i < n:
+        j = i + 1  # one stroke: a legato slur, otherwise one note
+        if tech[i] == "legato":
+            while j < n and run[j] == run[i] and not plan["new_stroke"].iloc[j]:
+                j += 1
+        stroke(plan, i, j, t, v, force, sl, rng, perf)
+        i = j
+    pos = _plan_bow(plan, v, force, sl, fs)
+    semis, string, beta = _left_hand(plan, perf, rng, t, sl)
+    lh = simulator_config()["left_hand"]
+    return dict(bow_velocity=v, bow_force=force, beta=np.clip(beta, *lh["beta_range"]),
+                bow_position=pos, string=string,
+                finger_ratio=finger_ratio(np.maximum(semis, 0.0)))
+
+
+def _plan_bow(plan: pd.DataFrame, v: np.ndarray, force: np.ndarray, sl: Slicer,
+              fs: float) -> np.ndarray:
+    """Bow position per frame: per run, fit the travel inside the hair; retakes in the rests.
+
+    Scales ``v`` and raises ``force`` in place where a run had to be slowed down to fit, and
+    adds the retake's motion to ``v`` where the lifted bow travels far.
+    """
+    cfg = simulator_config()["bow"]
+    budget = BowBudget(instrument_facts(INSTRUMENT).bow_length)
+    on = plan["on"].to_numpy()
+    stop = plan["stop"].to_numpy()
+    run = plan["run"].to_numpy()
+    n = len(plan)
+    pos = np.zeros(v.size)
+    runs = np.flatnonzero(np.r_[True, run[1:] != run[:-1]])
+    prev_end_pos = cfg["rest_position"]
+    prev_stop_frame = 0
+    for k, first in enumerate(runs):
+        last = (runs[k + 1] if k + 1 < len(runs) else n) - 1
+        s = sl(on[first] - cfg["run_lead"], stop[last] + cfg["run_tail"])
+        fit = budget.fit(budget.travel(np.cumsum(v[s]) / fs))
+        if fit.scale < 1.0:
+            v[s] *= fit.scale
+            force[s] *= 1.0 + cfg["squeeze_force"] * (1 - fit.scale)
+        travel = fit.travel
+        want = cfg["down_start"] if plan["direction"].iloc[first] > 0 else cfg["up_start"]
+        lo, hi = fit.start_window
+        start = float(np.clip(want - travel[0], lo, hi))
+        # a retake in a short rest can only move the lifted bow so far
+        reach = float(budget.travel(cfg["retake_speed"] * max(s.start - prev_stop_frame, 0)
+                                    / fs / (0.5 * np.pi)))
+        if k > 0:
+            start = float(np.clip(start, prev_end_pos - travel[0] - reach,
+                                  prev_end_pos - travel[0] + reach))
+            start = float(np.clip(start, lo, hi)) if lo <= hi else start
+        pos[s] = start + travel
+        # retake: the lifted bow moves from the previous end to this start
+        a, b = prev_stop_frame, s.start
+        if b > a:
+            ramp = 0.5 - 0.5 * np.cos(np.pi * np.linspace(0.0, 1.0, b - a))
+            delta = pos[s.start] - prev_end_pos
+            pos[a:b] = prev_end_pos + delta * ramp
+            if abs(delta) > cfg["retake_min"] and a > 0:
+                v[a:b] += np.gradient(pos[a:b]) * fs * budget.bow_length
+        prev_end_pos = pos[s.stop - 1]
+        prev_stop_frame = s.stop
+    pos[prev_stop_frame:] = prev_end_pos
+    return pos
+
+
+def _left_hand(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator, t: np.ndarray,
+               sl: Slicer) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Semitones (with vibrato), string and beta per frame.
+
+    Finger and string change slightly before the bow (legato: at the onset); beta glides to
+    each note's value with a slow drift.
+    """
+    cfg = simulator_config()["left_hand"]
+    tech = plan["technique"].to_numpy()
+    n = len(plan)
+    on = plan["on"].to_numpy()
+    opens = np.asarray(instrument_facts(INSTRUMENT).open_strings)
+    semitone = plan["midi_pitch"].to_numpy() - opens[plan["string"]]
+    semis = np.zeros(t.size)
+    string = np.full(t.size, int(plan["string"].iloc[0]), dtype=np.int8)
+    beta = np.full(t.size, float(plan["beta"].iloc[0]))
+    lead = np.where(tech == "legato", 0.0,
+                    np.clip(rng.normal(perf.finger_lead, cfg["lead_sd"], n), 0.0,
+                            cfg["lead_max"]))
+    lead = np.where(plan["run_position"].isin(["init", "iso"]).to_numpy(),
+                    rng.uniform(*cfg["run_lead"], n), lead)
+    change = on - lead
+    for i in range(n):
+        end = change[i + 1] if i + 1 < n else t[-1] + 1
+        s = sl(change[i], end)
+        semis[s] = semitone[i]
+        string[s] = plan["string"].iloc[i]
+        if plan["true_dur"].iloc[i] > cfg["vibrato_min_duration"] and \
+                tech[i] in ("detache", "legato"):
+            tt = t[s] - change[i]
+            depth = perf.vibrato * np.clip((tt - cfg["vibrato_delay"]) / cfg["vibrato_rise"],
+                                           0.0, 1.0)
+            semis[s] += depth * np.sin(2 * np.pi * cfg["vibrato_rate"] * tt
+                                       + rng.uniform(0, 2 * np.pi))
+        tt = t[s] - change[i]
+        target = plan["beta"].iloc[i] * (1 + cfg["beta_drift"] * rng.normal() * tt)
+        start_beta = beta[s.start - 1] if s.start > 0 else target
+        w = np.clip(tt / cfg["beta_glide"], 0.0, 1.0)
+        beta[s] = start_beta + (target - start_beta) * w
+    return semis, string, beta
+
+
+def _add_noise(sig: dict[str, np.ndarray], rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """Sensor noise of a motion-capture and strain-gauge setup."""
+    cfg = simulator_config()["noise"]
+    n = sig["bow_velocity"].size
+    out = dict(sig)
+    out["bow_velocity"] = sig["bow_velocity"] + rng.normal(0, cfg["bow_velocity"], n)
+    out["bow_force"] = np.abs(sig["bow_force"] + rng.normal(0, cfg["bow_force"], n))
+    out["beta"] = np.clip(sig["beta"] + rng.normal(0, cfg["beta"], n), *cfg["beta_range"])
+    out["bow_position"] = np.clip(sig["bow_position"] + rng.normal(0, cfg["bow_position"], n),
+                                  0.0, 1.0)
+    out["finger_ratio"] = np.clip(sig["finger_ratio"] + rng.normal(0, cfg["finger_ratio"], n),
+                                  0.0, limits().max_finger_ratio)
+    return out
+
+
+def _annotation(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator,
+                recording_id: str) -> pd.DataFrame:
+    cfg = simulator_config()["alignment"]
+    n = len(plan)
+    # coarse-alignment error: slowly varying (sd ~30 ms) plus per-note jitter (sd 10 ms)
+    drift = np.zeros(n)
+    for i in range(1, n):
+        drift[i] = cfg["drift_decay"] * drift[i - 1] + rng.normal(0, cfg["drift_sd"])
+    err = drift + rng.normal(0, cfg["jitter_sd"], n)
+    onset = np.maximum(plan["on"].to_numpy() + err, 0.0)
+    onset = np.maximum.accumulate(onset)
+    offset = np.maximum(plan["true_offset"].to_numpy() + np.r_[err[1:], err[-1]],
+                        onset + cfg["min_length"])
+    frame = pd.DataFrame(dict(
+        recording_id=recording_id, note_index=np.arange(n, dtype=np.int32), onset=onset,
+        offset=offset, midi_pitch=plan["midi_pitch"], string=plan["string"],
+        finger_ratio=plan["finger_ratio"], dynamic=plan["dynamic"],
+        technique=plan["technique"],
+        bow_direction=np.where(plan["direction"] > 0, "down", "up"),
+        slur_position=plan["slur_position"], run_position=plan["run_position"],
+        tempo_bpm=plan["tempo_bpm"], performer=perf.name,
+        true_onset=plan["on"], true_offset=plan["true_offset"]))
+    return validate_annotation(frame, source=recording_id)
+
+
+__all__ = ["play_script"]
