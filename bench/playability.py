@@ -43,8 +43,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--forces", type=int, default=25,
-                        help="forces per window, log-spaced 0.005..20 N")
+    parser.add_argument("--forces", type=int, default=49,
+                        help="forces per window, log-spaced 0.005..20 N (49: steps of x1.19)")
     parser.add_argument("--guettler", type=int, default=12,
                         help="accelerations and forces per Guettler map")
     parser.add_argument("--quick", action="store_true", help="small grid for a smoke run")
@@ -132,7 +132,9 @@ def summarise(todo: list[tuple], results: list, g: dict) -> dict:
 
 
 def settings(args: argparse.Namespace, g: dict) -> dict:
-    return {"forces": [round(f, 5) for f in g["forces"]], "velocities": list(g["velocities"]),
+    step = g["forces"][1] / g["forces"][0]
+    return {"forces": [round(f, 5) for f in g["forces"]], "force_step_factor": round(step, 4),
+            "velocities": list(g["velocities"]),
             "betas": list(g["betas"]), "seed": args.seed, "quick": args.quick,
             "workers": args.workers, "body": None, "regime_letters": pm.REGIME_LETTERS,
             "machine_lines": {
@@ -176,7 +178,7 @@ def schelleng_figure(path: Path, name: str, v: float, windows: list) -> Path:
             pts = [(w.beta, f) for w in mine for f, r in zip(w.forces, w.regimes, strict=True)
                    if r == letter]
             if pts:
-                ax.scatter(*zip(*pts, strict=True), s=30, marker="s", color=colour,
+                ax.scatter(*zip(*pts, strict=True), s=14, marker="s", color=colour,
                            label=pm.REGIME_LETTERS[letter])
         betas = np.geomspace(0.035, 0.23, 50)
         ax.plot(betas, pm.machine_f_min(betas), "k--",
@@ -211,7 +213,8 @@ def guettler_figure(path: Path, maps: list[dict]) -> Path:
     import matplotlib.pyplot as plt
     from matplotlib.colors import BoundaryNorm
 
-    fig, axes = plt.subplots(1, len(maps), figsize=(6 * len(maps), 5.5), squeeze=False)
+    fig, axes = plt.subplots(1, len(maps), figsize=(6 * len(maps), 5.5), squeeze=False,
+                             layout="constrained")
     cmap = plt.get_cmap("viridis", len(ATTACK_BINS) - 1).with_extremes(bad="lightgrey")
     norm = BoundaryNorm(ATTACK_BINS, cmap.N)
     for ax, m in zip(axes[0], maps, strict=True):
@@ -227,7 +230,7 @@ def guettler_figure(path: Path, maps: list[dict]) -> Path:
         if m["string"] == GUETTLER_EXAMPLE["string"]:
             ax.plot(GUETTLER_EXAMPLE["accelerations"], [GUETTLER_EXAMPLE["force"]] * 2, "r-",
                     lw=3, label="Guettler (real violin G): perfect at 0.5 N")
-            ax.legend(loc="upper left", fontsize=8)
+            fig.legend(loc="outside lower left", fontsize=8)
         ax.set(xscale="log", yscale="log", xlabel="bow acceleration (m/s²)",
                ylabel="bow force (N)",
                title=f"{m['instrument']} {m['string_name']} string, β = {m['beta']}")
