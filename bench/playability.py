@@ -11,7 +11,7 @@
 - Guettler maps of the violin G and D strings: bow from rest at constant acceleration, time
   from the first slip until Helmholtz motion, per acceleration and force.
 
-Run: ``python bench/playability.py --json [--workers 2] [--quick] [--plots out/playability]``.
+Run: ``python bench/playability.py --json [--workers 2] [--quick] [--plots DIR]``.
 Prints one JSON object on stdout (with ``--json``; a short summary otherwise); progress on
 stderr.
 """
@@ -48,7 +48,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--guettler", type=int, default=12,
                         help="accelerations and forces per Guettler map")
     parser.add_argument("--quick", action="store_true", help="small grid for a smoke run")
-    parser.add_argument("--plots", type=Path, default=Path("out/playability"))
+    parser.add_argument("--plots", type=Path, default=None,
+                        help="PNG directory (default out/playability, out/playability/quick)")
     parser.add_argument("--seed", type=int, default=0)
     return parser.parse_args(argv)
 
@@ -262,7 +263,8 @@ def main(argv: list[str] | None = None) -> dict:
     results = run_all(todo, args.workers, args.seed)
     report = {"settings": settings(args, g), **summarise(todo, results, g)}
     windows = [r for (kind, *_), r in zip(todo, results, strict=True) if kind == "window"]
-    report["plots"] = [str(p) for p in write_plots(args.plots, windows, report["guettler"])]
+    directory = args.plots or Path("out/playability") / ("quick" if args.quick else "")
+    report["plots"] = [str(p) for p in write_plots(directory, windows, report["guettler"])]
     report["runtime_s"] = round(time.perf_counter() - start, 1)
     if args.json:
         print(json.dumps(report, indent=1))
