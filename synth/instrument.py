@@ -36,7 +36,7 @@ from synth.controls import (
 )
 from synth.decimate import Decimator
 from synth.diagnostics import ContactDiagnostics, OnsetTracker, merge_diagnostics
-from synth.modal_kernel import CONTACT_GRIP, CONTACT_LIFTED
+from synth.modal_kernel import CONTACT_GRIP
 from synth.strings import InstrumentConstants, load_instrument
 from synth.tracks import DEFAULT_TAIL, play_actions
 from synth.voice import StringOutput, StringVoice
@@ -47,6 +47,8 @@ SUPPORTED_OVERSAMPLING = (1, 2, 4)
 DEFAULT_OVERSAMPLE = 2
 DEFAULT_MAX_MODE_FREQUENCY = 20000.0
 #: Output level: audio = OUTPUT_GAIN * body(bridge force in N).
+#: Entropy mixed into the seed of the rosin-noise stream (kept apart from friction noise).
+ROSIN_NOISE_STREAM = 0x5EED
 OUTPUT_GAIN = 0.05
 
 BodySpec = str | os.PathLike | np.ndarray | None
@@ -112,6 +114,7 @@ class Instrument:
                         max_mode_frequency=max_mode_frequency)
             for s, sq in zip(self.constants.strings, seeds, strict=False)
         ]
+        self._rosin_rng = np.random.default_rng(np.random.SeedSequence([seed, ROSIN_NOISE_STREAM]))
         self.body_response = self._body(body, int(body_seed))
         self._trackers = [OnsetTracker(self.internal_rate) for _ in self.voices]
         self.reset()
@@ -140,7 +143,7 @@ class Instrument:
         self._convolver = (BlockConvolver(self.body_response)
                            if self.body_response is not None else None)
         self._sample = 0
-        self._grip_until = [0] * self.n_strings
+        self._grips: list[list[tuple[int, int]]] = [[] for _ in range(self.n_strings)]
         self._held = [BowControl(0.0, 0.0, 0.1, 0.0) for _ in self.voices]
         self._outputs: dict[int, StringOutput] = {}
 
@@ -250,6 +253,9 @@ class Instrument:
             else:
                 self._advance_runs(voice, given, out)
                 total += out.bridge_force
+            if voice.string.rosin_noise > 0.0:
+                total += self._rosin_noise(voice.string.rosin_noise, given.bow_force,
+                                           out.slip_velocity)
             held = self._held[s]
             self._held[s] = BowControl(held.bow_velocity, held.bow_force,
                                        float(given.beta[-1]), float(given.finger_ratio[-1]))
@@ -266,6 +272,17 @@ class Instrument:
         audio = self._convolver.process(bridge) if self._convolver is not None else bridge
         self._sample += n_samples
         return Block((OUTPUT_GAIN * audio).astype(np.float32), bridge, diagnostics, per_hop)
+
+    def _rosin_noise(self, gain: float, bow_force: np.ndarray,
+                     slip_velocity: np.ndarray) -> np.ndarray:
+        """Bridge force (N) of the rosin's noise while the string slips under the bow.
+
+        White noise scaled by the friction power (bow force x slip speed, W) times ``gain``
+        (s/m, :attr:`synth.strings.StringConstants.rosin_noise`); its own seeded stream, so
+        the friction noise and the sound of a seed do not depend on it being on.
+        """
+        power = bow_force * slip_velocity
+        return gain * power * self._rosin_rng.standard_normal(power.size)
 
     def _scratch_output(self, n_internal: int) -> StringOutput:
         """Per-string output arrays of ``n_internal`` samples, reused from run to run."""
@@ -291,24 +308,27 @@ class Instrument:
                            np.array((held.finger_ratio,)), steady_contact=True)
 
     def _apply_plucks(self, s: int, given: StringInput, start: int) -> None:
-        """Turn pluck starts and a pluck still pulling into grip samples."""
+        """Turn every pluck's pull (its own interval, any number per run) into grip samples.
+
+        A pluck grips the string and pulls it along at :data:`PLUCK_SPEED` for its pull
+        distance, then lets go; pulls still under way carry over to the next run. Where two
+        pulls overlap the string stays gripped until the later one lets go.
+        """
         pulls = given.pluck_pulls or (PLUCK_DISPLACEMENT,) * len(given.pluck_offsets)
+        grips = [g for g in self._grips[s] if g[1] > start]
         for offset, pull in zip(given.pluck_offsets, pulls, strict=True):
-            self._grip_until[s] = start + offset + int(round(
-                pull / PLUCK_SPEED * self.internal_rate))
+            begin = start + offset
+            grips.append((begin, begin + max(int(round(pull / PLUCK_SPEED
+                                                       * self.internal_rate)), 1)))
         n = given.contact.size
-        grip_end = min(self._grip_until[s] - start, n)
-        if grip_end <= 0:
+        self._grips[s] = [g for g in grips if g[1] > start + n]
+        held = np.zeros(n, bool)
+        for begin, end in grips:
+            held[max(begin - start, 0):max(min(end - start, n), 0)] = True
+        if not held.any():
             return
-        first = min(given.pluck_offsets, default=0)
-        given.contact = given.contact.copy()
-        given.bow_velocity = given.bow_velocity.copy()
-        given.contact[first:grip_end] = CONTACT_GRIP
-        given.bow_velocity[first:grip_end] = PLUCK_SPEED
-        if grip_end < n and self._grip_until[s] - start == grip_end:
-            release = slice(grip_end, n)
-            given.contact[release] = np.where(given.bow_force[release] > 0,
-                                              given.contact[release], CONTACT_LIFTED)
+        given.contact = np.where(held, CONTACT_GRIP, given.contact).astype(np.int8)
+        given.bow_velocity = np.where(held, PLUCK_SPEED, given.bow_velocity)
 
     def _advance_runs(self, voice: StringVoice, given: StringInput, out: StringOutput) -> None:
         """Call the kernel once per run of sub-blocks sharing beta and finger."""

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import librosa
 import numpy as np
 
+from data_schemas.instruments import limits
 from synth.instrument import BowControl, Instrument
 
 HOP = 256
@@ -57,8 +58,13 @@ class StrokeReport:
 def steady_stroke(instrument: str | Instrument, string: int, *, bow_force: float,
                   bow_velocity: float = 0.3, beta: float = 0.1, finger_ratio: float = 0.0,
                   duration: float = 1.5, analysed: float = 0.5, seed: int = 0,
-                  oversample: int | None = None, body: str | None = None) -> StrokeReport:
+                  oversample: int | None = None, body: str | None = None,
+                  acceleration: float | None = None) -> StrokeReport:
     """Bow one string steadily and measure its regime and pitch.
+
+    The stroke starts as a bowing machine's (and a player's) does: the bow is set on the
+    string with the full force, at rest, for one hop, then accelerates at ``acceleration``
+    to ``bow_velocity`` and keeps it.
 
     Parameters
     ----------
@@ -76,6 +82,9 @@ def steady_stroke(instrument: str | Instrument, string: int, *, bow_force: float
         Final part over which slips and pitch are measured.
     seed, oversample, body
         Passed to :class:`~synth.instrument.Instrument` when a name is given.
+    acceleration : float, m/s^2, optional
+        Bow acceleration of the start (default: the largest a player uses,
+        :func:`data_schemas.instruments.limits`); ``inf`` jumps to full speed in one hop.
 
     Returns
     -------
@@ -83,11 +92,15 @@ def steady_stroke(instrument: str | Instrument, string: int, *, bow_force: float
     """
     inst = instrument if isinstance(instrument, Instrument) else Instrument(
         instrument, seed=seed, oversample=oversample, body=body)
-    control = BowControl(bow_velocity, bow_force, beta, finger_ratio)
+    accel = limits().max_bow_acceleration if acceleration is None else float(acceleration)
     n_blocks = int(round(duration * inst.sample_rate / HOP))
     first_analysed = n_blocks - int(round(analysed * inst.sample_rate / HOP))
     audio, onsets = [], []
     for i in range(n_blocks):
+        # block 0: the bow rests on the string; then the speed ramps up at ``accel``
+        speed = min(abs(bow_velocity), accel * i * HOP / inst.sample_rate)
+        control = BowControl(float(np.copysign(speed, bow_velocity)), bow_force, beta,
+                             finger_ratio)
         block = inst.process(HOP, {string: control})
         audio.append(block.audio)
         if i >= first_analysed:

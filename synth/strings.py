@@ -65,6 +65,9 @@ class StringConstants:
         Heat in the contact that lowers the static part of the friction by a factor e.
     rosin_cooling_time : float, s
         Time constant of the contact's cooling.
+    rosin_noise : float, s/m
+        Bridge force of the rosin's noise per unit friction power while the string slips
+        (bow noise; 0 for none).
     """
 
     name: str
@@ -89,6 +92,7 @@ class StringConstants:
     friction_model: str = "hyperbolic"
     rosin_heat: float = 1.0e-5
     rosin_cooling_time: float = 3.0e-5
+    rosin_noise: float = 0.0
 
     @property
     def bending_stiffness(self) -> float:
@@ -137,7 +141,7 @@ TUNINGS = ("bowed", "first_mode", "published")
 #: Keys of ``[defaults]`` that every string takes unless it sets its own.
 PER_STRING_DEFAULTS = ("finger_stiffness", "finger_damping", "damping_b1", "damping_b2",
                        "torsion_frequency_ratio", "torsion_impedance_ratio", "torsion_q",
-                       "friction_model", "rosin_heat", "rosin_cooling_time")
+                       "friction_model", "rosin_heat", "rosin_cooling_time", "rosin_noise")
 
 
 def _no_facts(entry: dict, where: str, path: str) -> None:

@@ -21,7 +21,7 @@ from data_schemas.actions import validate_actions
 from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
 from data_schemas.errors import ParameterError
 from synth.control_kernel import sample_bowing
-from synth.controls import PLUCK_DISPLACEMENT, SUB_BLOCK, StringInput
+from synth.controls import PLUCK_DISPLACEMENT, PLUCK_SPEED, SUB_BLOCK, StringInput
 
 #: Output samples rendered per step (a multiple of SUB_BLOCK); ~1.5 s at 44.1 kHz (longer
 #: steps cost nothing in the body FFT per sample and save per-step overhead).
@@ -35,6 +35,15 @@ _STEP = 1e-9
 PLUCK_REFERENCE_FORCE = 1.0
 
 
+def pluck_pull(strength: np.ndarray) -> np.ndarray:
+    """How far (m) plucks of the given strengths (a pluck row's bow_force, N) pull the string.
+
+    ``strength / PLUCK_REFERENCE_FORCE`` times :data:`PLUCK_DISPLACEMENT`; 0 N is the default.
+    """
+    strength = np.asarray(strength, dtype=np.float64)
+    return PLUCK_DISPLACEMENT * np.where(strength > 0, strength / PLUCK_REFERENCE_FORCE, 1.0)
+
+
 @dataclass(frozen=True)
 class StringTrack:
     """The rows of one string as arrays, for interpolation."""
@@ -44,7 +53,7 @@ class StringTrack:
     bow_force: np.ndarray
     beta: np.ndarray
     finger_ratio: np.ndarray
-    pluck_times: np.ndarray
+    pluck_times: np.ndarray  # when each pull starts, s (it lets go at its row's time)
     pluck_forces: np.ndarray
 
     @classmethod
@@ -56,10 +65,16 @@ class StringTrack:
         for i in np.flatnonzero(np.diff(time) <= 0.0) + 1:
             time[i] = max(time[i], time[i - 1] + _STEP)
         pluck = columns["pluck"].astype(bool)
-        return cls(time, *(columns[c].astype(np.float64) for c in
-                           ("bow_velocity", "bow_force", "beta", "finger_ratio")),
-                   columns["time"][pluck].astype(np.float64),
-                   columns["bow_force"][pluck].astype(np.float64))
+        strength = columns["bow_force"][pluck].astype(np.float64)
+        # A pluck row's bow_force is the pluck's strength, not a bow pressing the string: the
+        # bow stays off (force 0) unless other rows bow, and the pull starts early enough to
+        # let go at the row's time.
+        bow_force = np.where(pluck, 0.0, columns["bow_force"]).astype(np.float64)
+        starts = columns["time"][pluck].astype(np.float64) - pluck_pull(strength) / PLUCK_SPEED
+        return cls(time, columns["bow_velocity"].astype(np.float64), bow_force,
+                   columns["beta"].astype(np.float64),
+                   columns["finger_ratio"].astype(np.float64), np.maximum(starts, 0.0),
+                   strength)
 
     def sample(self, column: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Linear interpolation of ``column`` at times ``t`` (held beyond the ends)."""
@@ -77,8 +92,7 @@ class StringTrack:
         hi = (start + n_out) / inst.sample_rate
         now = (self.pluck_times >= lo) & (self.pluck_times < hi)
         offsets = tuple(int(round((p - lo) * inst.internal_rate)) for p in self.pluck_times[now])
-        pulls = tuple(PLUCK_DISPLACEMENT * (f / PLUCK_REFERENCE_FORCE if f > 0 else 1.0)
-                      for f in self.pluck_forces[now])
+        pulls = tuple(float(p) for p in pluck_pull(self.pluck_forces[now]))
         return StringInput(velocity, force, contact, self.sample(self.beta, t_sub),
                            self.sample(self.finger_ratio, t_sub), offsets, pulls)
 

@@ -8,13 +8,11 @@ import numpy as np
 
 from synth.modal import (
     ModeBasis,
-    aligned_zeros,
     bridge_mode_count,
     contact_coefficients,
     kernel_state,
     mode_basis,
     pack_coefficients,
-    padded_modes,
     state_scale,
 )
 from synth.modal_kernel import (
