@@ -15,9 +15,9 @@ import numpy as np
 import scipy.fft
 import scipy.signal
 import soundfile as sf
-from numba import njit
 
 from data_schemas.errors import ParameterError
+from synth.body_kernel import ring_multiply_add
 
 #: Signature modes of a violin body: (frequency Hz, quality factor, relative amplitude).
 VIOLIN_SIGNATURE_MODES = (
@@ -128,18 +128,6 @@ def load_body_ir(path: str | os.PathLike, sample_rate: int) -> np.ndarray:
     return ir / np.sqrt(energy)
 
 
-@njit(cache=True)
-def _ring_multiply_add(ring, head, parts, out):  # pragma: no cover - numba
-    """Sum over partitions p of ring[(head + p) % P] * parts[p], into ``out`` (spectra)."""
-    n_parts = parts.shape[0]
-    out[:] = 0.0
-    for p in range(n_parts):
-        row = ring[(head + p) % n_parts]
-        part = parts[p]
-        for k in range(out.size):
-            out[k] += row[k] * part[k]
-
-
 #: Overlap-save segments are at least this many response lengths long.
 OVERLAP_SAVE_RATIO = 4
 
@@ -229,8 +217,7 @@ class BlockConvolver:
         previous = self._history[self._history.size - b:]
         self._head = (self._head - 1) % n_parts
         self._fdl[self._head] = scipy.fft.rfft(np.concatenate([previous, block]))
-        spectrum = np.empty(b + 1, np.complex128)
-        _ring_multiply_add(self._fdl, self._head, self._part_spectra, spectrum)
+        spectrum = ring_multiply_add(self._fdl, self._head, self._part_spectra)
         return scipy.fft.irfft(spectrum, 2 * b)[b:]
 
     def _rebuild_fdl(self) -> None:

@@ -1,6 +1,7 @@
 """Contact diagnostics of a block: what the string did under the bow.
 
-The teacher and the evaluation read these; the feedback controller never does.
+The teacher and the evaluation read these; the feedback controller never does. The
+per-sample counting is :func:`synth.diagnostics_kernel.summarise_slips` (numba).
 """
 
 from __future__ import annotations
@@ -8,16 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
-from synth.modal_kernel import OFF_STRING, SLIPPING
-
-#: A slip counts (as an onset) once the string slides past the bow at this share of the
-#: bow's speed. Near the lower force limit the string also releases for 3-4 internal samples
-#: at 0.02-0.05 m/s against a 0.33 m/s bow (a Helmholtz flyback slides at about 3 m/s):
-#: such micro-slips leave the sound unchanged (harmonics within 0.4 dB) but, counted, made
-#: Helmholtz motion look like multiple slipping to the teacher (violin A string, mf lane).
-SLIP_ONSET_SPEED_RATIO = 0.5
+from synth.diagnostics_kernel import summarise_slips
 
 
 @dataclass(frozen=True)
@@ -28,7 +21,8 @@ class ContactDiagnostics:
     ----------
     slip_onsets : int
         Number of slips: slipping phases in which the string slides past the bow at
-        :data:`SLIP_ONSET_SPEED_RATIO` of the bow's speed or more (micro-slips excluded).
+        :data:`synth.diagnostics_kernel.SLIP_ONSET_SPEED_RATIO` of the bow's speed or more
+        (micro-slips excluded).
     slipping_share : float
         Fraction of the block's samples spent slipping (0..1).
     contact_share : float
@@ -66,32 +60,6 @@ def _median_interval(first: float, later: np.ndarray) -> float:
                                                                   + intervals[mid]))
 
 
-@njit(cache=True)
-def _summarise(stick_slip, slip_velocity, bow_velocity, counted, onsets):  # pragma: no cover
-    """Count slips (onset samples written to ``onsets``), slipping and contact samples, slip sum.
-
-    ``counted`` says whether the slip under way when the block starts has been counted
-    (False when none is); returns it for the block's end too.
-    """
-    n_onsets = 0
-    n_slip = 0
-    n_contact = 0
-    slip_sum = 0.0
-    for i in range(stick_slip.size):
-        if stick_slip[i] == SLIPPING:
-            n_slip += 1
-            slip_sum += slip_velocity[i]
-            if not counted and slip_velocity[i] >= SLIP_ONSET_SPEED_RATIO * abs(bow_velocity[i]):
-                onsets[n_onsets] = i
-                n_onsets += 1
-                counted = True
-        else:
-            counted = False
-        if stick_slip[i] != OFF_STRING:
-            n_contact += 1
-    return n_onsets, n_slip, n_contact, slip_sum, counted
-
-
 class OnsetTracker:
     """Turns per-sample stick-slip states into :class:`ContactDiagnostics`, block by block."""
 
@@ -121,10 +89,10 @@ class OnsetTracker:
         if not stick_slip.any():  # bow off the string: nothing to count
             self._counted = False
             return ContactDiagnostics(0, 0.0, 0.0, 0.0, float("nan"), _NO_ONSETS)
-        onsets = np.empty(stick_slip.size, np.int64)
-        n_onsets, n_slip, n_contact, slip_sum, self._counted = _summarise(
-            stick_slip, slip_velocity, bow_velocity, self._counted, onsets)
-        times = (start_sample + onsets[:n_onsets]) / self.internal_rate
+        onsets, n_slip, n_contact, slip_sum, self._counted = summarise_slips(
+            stick_slip, slip_velocity, bow_velocity, self._counted)
+        n_onsets = onsets.size
+        times = (start_sample + onsets) / self.internal_rate
         if np.isfinite(self._last_onset):
             period = _median_interval(self._last_onset, times)
         else:

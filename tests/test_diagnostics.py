@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from synth.diagnostics import SLIP_ONSET_SPEED_RATIO, OnsetTracker
+from synth.diagnostics import OnsetTracker
+from synth.diagnostics_kernel import SLIP_ONSET_SPEED_RATIO
 
 RATE = 88200.0
 

@@ -108,6 +108,18 @@ def long_functions(limit: int = MAX_FUNCTION_LINES) -> list[str]:
     return out
 
 
+def kernels_outside_kernel_modules(root: Path = ROOT) -> list[str]:
+    """Numba-compiled functions of the four packages in a module not named ``*_kernel``."""
+    out = []
+    for name, path in project_modules(root).items():
+        if name.rsplit(".", 1)[-1].endswith("_kernel"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.FunctionDef) and is_numba_kernel(node):
+                out.append(f"{name}.{node.name}")
+    return out
+
+
 def test_the_graph_finder_sees_a_cycle_through_a_function_level_import(tmp_path):
     pkg = tmp_path / "synth"
     pkg.mkdir()
@@ -147,6 +159,21 @@ def test_no_module_over_500_lines():
 
 def test_no_function_over_80_lines_outside_numba_kernels():
     assert long_functions() == []
+
+
+def test_the_kernel_finder_sees_a_numba_function_outside_a_kernel_module(tmp_path):
+    for pkg in PACKAGES:
+        (tmp_path / pkg).mkdir()
+    (tmp_path / "synth" / "fast_kernel.py").write_text(
+        "@njit(cache=True)\ndef a(x):\n    return x\n")
+    (tmp_path / "synth" / "slow.py").write_text(
+        "import numba\n\n\nclass C:\n    @staticmethod\n    @numba.njit\n    def b(x):\n"
+        "        return x\n\n\ndef c(x):\n    return x\n")
+    assert kernels_outside_kernel_modules(tmp_path) == ["synth.slow.b"]
+
+
+def test_every_numba_function_lives_in_a_kernel_module():
+    assert kernels_outside_kernel_modules() == []
 
 
 def command_paths(parser=None, prefix=()) -> list[tuple[str, ...]]:
