@@ -15,7 +15,7 @@ Examples
 --------
 >>> window_limits([0.1, 0.2, 0.4, 0.8], "mHxH")
 (0.2, 0.8, 1)
->>> round(machine_f_min(0.1), 4), round(machine_f_max(0.3, 0.1), 3)
+>>> round(float(machine_f_min(0.1)), 4), round(float(machine_f_max(0.3, 0.1)), 3)
 (0.0385, 2.595)
 """
 
