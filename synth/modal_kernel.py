@@ -225,7 +225,7 @@ def pack_friction(mu_s: float, mu_d: float, v0: float, noise_depth: float, *,
     --------
     >>> f = pack_friction(0.7, 0.3, 0.3, 0.02, model=THERMAL, rosin_heat=1e-5,
     ...                   rosin_cooling_time=3e-5, sample_rate=88200.0)
-    >>> f[FRICTION_MODEL] == THERMAL, round(float(f[FRICTION_COOLING]), 3)
+    >>> bool(f[FRICTION_MODEL] == THERMAL), round(float(f[FRICTION_COOLING]), 3)
     (True, 0.685)
     """
     out = np.empty(N_FRICTION)

@@ -68,6 +68,49 @@ def test_kernel_matches_numpy_twin(string_index, finger_ratio):
     np.testing.assert_allclose(kernel[1], twin[1], rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("thermal", [None, (1e-5, 3e-5)])
+@pytest.mark.parametrize(("string_index", "finger_ratio", "n_torsion"),
+                         [(1, 0.0, 0), (1, 0.0, 12), (0, 1 - 2 ** (-7 / 12), 12)])
+def test_torsion_and_thermal_friction_match_the_numpy_twin(string_index, finger_ratio,
+                                                           n_torsion, thermal):
+    """Torsional modes at the bow and rosin friction: kernel == twin (1e-9, float64)."""
+    import dataclasses
+
+    string = dataclasses.replace(load_instrument("violin").strings[string_index],
+                                 torsion_frequency_ratio=4.0, damping_b2=0.05)
+    basis = mode_basis(string, 88200.0, max_frequency=20000.0)
+    velocity = np.linspace(0.0, 0.4, N)
+    force = np.full(N, 0.5)
+    contact = np.ones(N, np.int8)
+    contact[:50] = 0
+    kernel = run_kernel(basis, string, 0.11, finger_ratio, velocity, force, contact,
+                        np.random.default_rng(4), n_torsion=n_torsion, thermal=thermal)
+    twin = naive_string(basis, 0.11, finger_ratio,
+                        (string.mu_s, string.mu_d, string.v0, 0.02),
+                        (string.finger_stiffness, string.finger_damping),
+                        velocity, force, contact, np.random.default_rng(4),
+                        n_torsion=n_torsion, thermal=thermal)
+    assert set(np.unique(kernel[2])) >= {1, 2}, "the run must both stick and slip"
+    np.testing.assert_array_equal(kernel[2], twin[2])
+    scale = np.abs(twin[0]).max()
+    np.testing.assert_allclose(kernel[0], twin[0], rtol=0, atol=1e-9 * max(scale, 1.0))
+    np.testing.assert_allclose(kernel[1], twin[1], rtol=0, atol=1e-9)
+
+
+def test_torsion_takes_part_of_the_bow_force_but_not_the_bridge():
+    """With torsion the bow point is more compliant (larger admittance) and the bridge gain
+    per bow force is unchanged: torsion does not drive the bridge."""
+    import dataclasses
+
+    string = dataclasses.replace(load_instrument("violin").strings[1],
+                                 torsion_frequency_ratio=4.0)
+    basis = mode_basis(string, 88200.0, max_frequency=20000.0)
+    plain = contact_coefficients(basis, 0.1, 0.0)
+    twisted = contact_coefficients(basis, 0.1, 0.0, 12)
+    assert twisted.gains[0] > plain.gains[0]
+    assert twisted.gains[6] == plain.gains[6]
+
+
 def test_kernel_is_stable_with_every_mode_below_nyquist():
     string = load_instrument("violin").strings[3]
     basis = mode_basis(string, 44100.0)
