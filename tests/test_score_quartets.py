@@ -6,11 +6,9 @@ else ``/work/shared/data``. A missing directory fails the test with that message
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
+from _data import shared_data
 
 from pipelines.perform.config import load_config
 from pipelines.perform.rules import perform_part
@@ -22,17 +20,6 @@ QUARTETS = (
     "Haydn-Joseph-String-Quartet-in-D-minor-Hob.III76-Op.76-No.2-sq12772795.mxl",
     "Haydn-Joseph-String-Quartet-in-B-flat-major-Hob.III67-Op.64-No.3-sq7123582.mxl",
 )
-
-
-def shared_data() -> Path:
-    candidates = [os.environ.get("ARCO_SHARED_DATA"),
-                  Path(__file__).resolve().parents[1].parent / "shared" / "data",
-                  "/work/shared/data"]
-    for c in candidates:
-        if c and (Path(c) / "openscore-quartets").is_dir():
-            return Path(c)
-    pytest.fail("shared data not found: set ARCO_SHARED_DATA to the directory holding "
-                f"openscore-quartets/ (tried {[str(c) for c in candidates if c]})")
 
 
 @pytest.fixture(scope="module", params=QUARTETS, ids=lambda n: n.split("-String")[0])
