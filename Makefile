@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 NPROC := $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: demo test bench lint venv clean
+.PHONY: demo test bench lint venv clean stk peers
 
 venv: $(STAMP)
 
@@ -27,19 +27,31 @@ lint: $(STAMP)
 
 # Every benchmark prints one JSON object; the listening models trained by feedback_speed
 # are reused by sampling_speed (out/bench-models).
-bench: $(STAMP) stk
+bench: $(STAMP) stk peers
 	$(BIN)/python bench/cli_speed.py --json
 	$(BIN)/python bench/synth_speed.py --json
 	$(BIN)/python bench/score_speed.py --json
 	$(BIN)/python bench/build_db.py --json
 	$(BIN)/python bench/feedback_speed.py --json --workers 2 --models out/bench-models
 	$(BIN)/python bench/sampling_speed.py --json --models out/bench-models
+	$(BIN)/python bench/timbre.py --json
+	$(BIN)/python bench/playability.py --json --workers 2
 
 # STK's Bowed waveguide is the speed peer of bench/synth_speed.py (Debian's libstk-dev).
 stk:
 	@if ! ls /usr/include/stk/Bowed.h >/dev/null 2>&1; then \
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq libstk-dev g++ >/dev/null; \
 	  else sudo apt-get update -qq && sudo apt-get install -y -qq libstk-dev g++ >/dev/null; fi; \
+	fi
+
+# Artifastring (shared/peers, built by its run.sh: g++, libfftw3-dev) and FluidR3 through
+# fluidsynth (fluidsynth, fluid-soundfont-gm): the peers of synth_speed.py and timbre.py.
+peers:
+	@if ! ls /usr/include/fftw3.h /usr/share/sounds/sf2/FluidR3_GM.sf2 >/dev/null 2>&1 \
+	    || ! command -v fluidsynth >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
+	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq g++ libfftw3-dev fluidsynth \
+	    fluid-soundfont-gm >/dev/null; \
 	fi
 
 clean:

@@ -3,7 +3,9 @@
 Usage: ``python bench/synth_speed.py --json`` (``make bench`` installs Debian's libstk-dev
 for the STK peer first). Prints one JSON object; each entry gives the real-time factor
 (audio seconds per CPU second, median of 5, single thread), the number of modes per string
-and the internal sample rate. See shared/reference/peers.md for Artifastring's figures.
+and the internal sample rate. Artifastring (``shared/peers/artifastring/run.sh``, built with
+g++ and Debian's libfftw3-dev, which ``make bench`` installs) is timed in the same run, and
+the ratios of Arco's figures to its figures are reported.
 """
 
 from __future__ import annotations
@@ -77,6 +79,51 @@ def time_stk() -> dict:
             "internal_rate_hz": 44100, "note": "digital waveguide, one voice, no body"}
 
 
+def artifastring_dir() -> Path | None:
+    """The Artifastring peer beside the repository (``$ARCO_SHARED/peers`` or ``../shared``)."""
+    for base in (os.environ.get("ARCO_SHARED"), HERE.parents[1] / "shared", "/work/shared"):
+        if base and (Path(base) / "peers" / "artifastring" / "run.sh").exists():
+            return Path(base) / "peers" / "artifastring"
+    return None
+
+
+def time_artifastring() -> dict:
+    """Artifastring's own harness, same run (cases a: D string full chain, b: four strings)."""
+    peer = artifastring_dir()
+    if peer is None:
+        return {"reason": "shared/peers/artifastring not found (set ARCO_SHARED)"}
+    run = subprocess.run(["bash", str(peer / "run.sh"), "--seconds", str(int(SECONDS)),
+                          "--runs", str(REPEATS), "--cases", "a,b", "--wav", ""],
+                         capture_output=True, text=True)
+    if run.returncode != 0:
+        return {"reason": f"run.sh failed: {run.stderr.strip()[-300:]}"}
+    return json.loads(run.stdout)
+
+
+def _rtf(entry: object) -> float | None:
+    """The CPU real-time factor of one of the peer's cases (``rtf_cpu_median``)."""
+    if isinstance(entry, dict):
+        for key in ("rtf_cpu_median", "real_time_factor", "rtf"):
+            if isinstance(entry.get(key), int | float):
+                return float(entry[key])
+    return float(entry) if isinstance(entry, int | float) else None
+
+
+def ratios(result: dict, peer: dict) -> dict:
+    """Arco's real-time factors over Artifastring's (same run)."""
+    cases = peer.get("cases", peer)
+    a = _rtf(cases.get("a_d_string_full")) if isinstance(cases, dict) else None
+    b = _rtf(cases.get("b_four_strings_full")) if isinstance(cases, dict) else None
+    out = {}
+    if a:
+        out["d_string_equivalent_over_artifastring"] = round(
+            result["d_string_equivalent"]["real_time_factor"] / a, 2)
+    if b:
+        out["all_strings_over_artifastring"] = round(
+            result["all_strings"]["real_time_factor"] / b, 2)
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
@@ -88,8 +135,9 @@ def main() -> None:
                                            max_mode_frequency=None),
         "all_strings": time_render([0, 1, 2, 3]),
         "stk_bowed": time_stk(),
-        "peers": {"artifastring_d_string_full_chain": 89, "artifastring_all_strings": 19},
     }
+    result["artifastring"] = time_artifastring()
+    result["ratios"] = ratios(result, result["artifastring"])
     print(json.dumps(result, indent=None if args.json else 2))
 
 
