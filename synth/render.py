@@ -1,11 +1,7 @@
 """Actions table -> audio on any registered engine (default: the modal model).
 
-Rows are control frames per string; continuous columns are interpolated linearly between
-rows of the same string (at a repeated time the later row wins, so steps are exact). A
-string is bowed from its first row to its last and where ``bow_force > 0``; after its last
-row the bow is lifted and the string rings on. ``pluck`` rows start a pluck whose strength
-is the row's ``bow_force``: the string is pulled ``bow_force`` x 1 mm/N and let go at the row's
-time (0 N: the default 1 mm; the pull starts 10 ms per mm before).
+How the modal engine reads the table (interpolation between rows, lifted bows, plucks) is
+described in :mod:`synth.tracks`.
 """
 
 from __future__ import annotations

@@ -21,9 +21,9 @@ def scale_actions(instrument: str, *, note_duration: float = 0.45, bow_velocity:
                   beta: float = 0.1, start: float = 0.0) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Build the actions of a detache pentachord up every string of ``instrument``.
 
-    Each note accelerates to ``bow_velocity`` (m/s) in 50 ms, holds, and stops before the
-    bow change; the force is the string's reference force (its Helmholtz mid force at
-    beta 0.1, 0.3 m/s) scaled with velocity.
+    Each note sets the bow on the string, accelerates to ``bow_velocity`` (m/s) in 50 ms,
+    holds, and stops before the bow change; the force is the string's reference force (its
+    Helmholtz mid force at beta 0.1, 0.3 m/s) scaled with velocity.
 
     Returns
     -------
@@ -40,7 +40,8 @@ def scale_actions(instrument: str, *, note_duration: float = 0.45, bow_velocity:
         force = string.reference_force * bow_velocity / 0.3
         for step in SCALE_STEPS:
             finger = float(finger_ratio(step))
-            for dt, v, f in ((0.0, 0.0, 0.0), (0.05, bow_velocity, force),
+            # the bow is set on the string with its force (5 ms), then accelerates in 50 ms
+            for dt, v, f in ((0.0, 0.0, 0.0), (0.005, 0.0, force), (0.055, bow_velocity, force),
                              (note_duration - 0.08, bow_velocity, force),
                              (note_duration - 0.02, 0.0, 0.0)):
                 rows.append((t + dt, s, finger, f, direction * v, beta, 0.5, False))

@@ -28,6 +28,8 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     import numpy as np
 
 SAMPLE_RATE = 44100
+#: Scale notes further than this from their pitch are flagged in the report, cents.
+PITCH_TOLERANCE_CENTS = 10.0
 DEMO_MEASURES = (1, 8)
 #: Size of the simulated recording set of the demo (notes, performers).
 DEMO_RECORDINGS = (2000, 3)
@@ -187,5 +189,7 @@ def _pitch_rows(name: str, audio: np.ndarray, events) -> list[str]:
         b = int((t0 + 0.35) * SAMPLE_RATE)
         target = Pitch(label).frequency
         f0 = yin_pitch(audio[a:b], SAMPLE_RATE, target)
-        rows.append(f"| {name} | {label} | {1200 * np.log2(f0 / target):+.1f} |")
+        cents = 1200 * np.log2(f0 / target)
+        flag = "" if abs(cents) <= PITCH_TOLERANCE_CENTS else " **off**"
+        rows.append(f"| {name} | {label} | {cents:+.1f}{flag} |")
     return rows
