@@ -108,6 +108,26 @@ def guettler_summary(name: str, s: int, g: dict, attacks: list[pm.Attack]) -> di
             "perfect_accelerations": [pm.perfect_window(attacks, f) for f in g["attack_forces"]]}
 
 
+def pitch_with_force(windows: list) -> list[dict]:
+    """Per string at beta 0.1, 0.3 m/s: the pitch (cents) at the lowest and highest force of
+    its Helmholtz window, and the change between them (real strings flatten a few cents)."""
+    out = []
+    for w in windows:
+        if abs(w.bow_velocity - 0.3) > 1e-9 or abs(w.beta - 0.1) > 1e-9:
+            continue
+        sounding = [(f, c) for f, c in zip(w.forces, w.pitch_cents, strict=True)
+                    if c == c]  # NaN where not in Helmholtz motion
+        if not sounding:
+            out.append({"instrument": w.instrument, "string": w.string, "change_cents": None})
+            continue
+        (f_lo, c_lo), (f_hi, c_hi) = sounding[0], sounding[-1]
+        out.append({"instrument": w.instrument, "string": w.string,
+                    "low_force": round(f_lo, 3), "low_force_cents": round(c_lo, 2),
+                    "high_force": round(f_hi, 3), "high_force_cents": round(c_hi, 2),
+                    "change_cents": round(c_hi - c_lo, 2)})
+    return out
+
+
 def summarise(todo: list[tuple], results: list, g: dict) -> dict:
     """The JSON object: windows, the two checks and the Guettler maps."""
     windows = [r for (kind, *_), r in zip(todo, results, strict=True) if kind == "window"]
@@ -122,6 +142,7 @@ def summarise(todo: list[tuple], results: list, g: dict) -> dict:
     n_helm = sum(p["helmholtz"] for p in players)
     return {
         "windows": [w.as_dict() for w in windows],
+        "pitch_with_force": pitch_with_force(windows),
         "schelleng_check": {
             "cells": cells, "passed": passed, "n_cells": len(cells),
             "share": round(passed / len(cells), 3) if cells else None, "required_share": 0.8,

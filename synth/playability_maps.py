@@ -21,6 +21,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -123,6 +124,9 @@ class Window:
     forces : tuple of float, N
     regimes : str
         One :data:`REGIME_LETTERS` letter per force.
+    pitch_cents : tuple of float, cents
+        Sounding pitch against the nominal one per force (NaN where not in Helmholtz
+        motion): how the pitch moves with bow force.
     """
 
     instrument: str
@@ -131,6 +135,7 @@ class Window:
     beta: float
     forces: tuple[float, ...]
     regimes: str
+    pitch_cents: tuple[float, ...] = ()
 
     @property
     def limits(self) -> tuple[float | None, float | None, int]:
@@ -143,18 +148,20 @@ class Window:
         return {"instrument": self.instrument, "string": self.string,
                 "string_name": instrument_facts(self.instrument).string_names[self.string],
                 "bow_velocity": self.bow_velocity, "beta": self.beta, "f_min": f_min,
-                "f_max": f_max, "holes": holes, "regimes": self.regimes}
+                "f_max": f_max, "holes": holes, "regimes": self.regimes,
+                "pitch_cents": [None if not math.isfinite(c) else round(c, 2)
+                                for c in self.pitch_cents]}
 
 
 def measure_window(instrument: str, string: int, bow_velocity: float, beta: float,
                    forces: Sequence[float], *, seed: int = 0) -> Window:
     """Steady strokes (no body) at each force; see :class:`Window`."""
-    letters = "".join(
-        regime_letter(steady_stroke(instrument, string, bow_force=float(f),
-                                    bow_velocity=bow_velocity, beta=beta, seed=seed, body=None))
-        for f in forces)
+    reports = [steady_stroke(instrument, string, bow_force=float(f), bow_velocity=bow_velocity,
+                             beta=beta, seed=seed, body=None) for f in forces]
+    letters = "".join(regime_letter(r) for r in reports)
+    pitch = tuple(float(r.pitch_error_cents) if r.is_helmholtz else math.nan for r in reports)
     return Window(instrument, string, float(bow_velocity), float(beta),
-                  tuple(float(f) for f in forces), letters)
+                  tuple(float(f) for f in forces), letters, pitch)
 
 
 def machine_f_min(beta: float | np.ndarray, k: float = MACHINE_K) -> float | np.ndarray:
