@@ -281,8 +281,11 @@ class Instrument:
         (s/m, :attr:`synth.strings.StringConstants.rosin_noise`); its own seeded stream, so
         the friction noise and the sound of a seed do not depend on it being on.
         """
-        power = bow_force * slip_velocity
-        return gain * power * self._rosin_rng.standard_normal(power.size)
+        noise = np.zeros(slip_velocity.size)
+        slipping = np.flatnonzero(slip_velocity)  # draws only where the string slips
+        noise[slipping] = (gain * bow_force[slipping] * slip_velocity[slipping]
+                           * self._rosin_rng.standard_normal(slipping.size))
+        return noise
 
     def _scratch_output(self, n_internal: int) -> StringOutput:
         """Per-string output arrays of ``n_internal`` samples, reused from run to run."""
