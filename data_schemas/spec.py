@@ -195,18 +195,31 @@ def _check_column(array: pa.ChunkedArray, col: Column, source: str) -> None:
             raise SchemaError(f"value {float(values[row])} is not finite", source=source,
                               column=col.name, row=row)
     bad = np.zeros(values.shape, bool)
+    lo, hi = _bounds_in_precision(col)
     with np.errstate(invalid="ignore"):
-        if col.minimum is not None:
-            bad |= valid & ((values <= col.minimum) if col.exclusive_minimum
-                            else (values < col.minimum))
-        if col.maximum is not None:
-            bad |= valid & ((values >= col.maximum) if col.exclusive_maximum
-                            else (values > col.maximum))
+        if lo is not None:
+            bad |= valid & ((values <= lo) if col.exclusive_minimum else (values < lo))
+        if hi is not None:
+            bad |= valid & ((values >= hi) if col.exclusive_maximum else (values > hi))
     if bad.any():
         row = _first_true(bad)
         raise SchemaError(
             f"value {float(values[row])!r} outside the allowed range {col.range_text()}",
             source=source, column=col.name, row=row)
+
+
+def _bounds_in_precision(col: Column) -> tuple[float | None, float | None]:
+    """The column's bounds as its storage type holds them.
+
+    A float32 column stores the documented maximum 0.8 as 0.800000011920929, which must
+    still be accepted.
+    """
+    def stored(bound: float | None) -> float | None:
+        if bound is None or not pa.types.is_float32(col.type):
+            return bound
+        return float(np.float32(bound))
+
+    return stored(col.minimum), stored(col.maximum)
 
 
 def non_decreasing(column: str, *, within: str | None = None) -> TableCheck:

@@ -55,8 +55,9 @@ def simulate_recordings(n_notes: int, n_performers: int, out_dir: str | Path, *,
     list of pathlib.Path
         The recording files written.
     """
-    if n_notes < 1 or n_performers < 1:
-        raise ParameterError(f"n_notes={n_notes} and n_performers={n_performers} must be >= 1")
+    if n_notes < 1 or n_performers < 1 or notes_per_take < 1:
+        raise ParameterError(f"n_notes={n_notes}, n_performers={n_performers} and "
+                             f"notes_per_take={notes_per_take} must be >= 1")
     if not 200.0 <= frame_rate <= 240.0:
         raise ParameterError(f"frame_rate={frame_rate} Hz is outside 200-240 Hz")
     rng = np.random.default_rng(seed)

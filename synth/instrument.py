@@ -47,6 +47,8 @@ SUPPORTED_OVERSAMPLING = (1, 2, 4)
 DEFAULT_OVERSAMPLE = 2
 DEFAULT_MAX_MODE_FREQUENCY = 20000.0
 #: Output level: audio = OUTPUT_GAIN * body(bridge force in N).
+#: Smallest contact position (beta) of a plucking finger.
+PLUCK_MIN_BETA = 0.02
 #: Entropy mixed into the seed of the rosin-noise stream (kept apart from friction noise).
 ROSIN_NOISE_STREAM = 0x5EED
 OUTPUT_GAIN = 0.05
@@ -330,6 +332,9 @@ class Instrument:
             held[max(begin - start, 0):max(min(end - start, n), 0)] = True
         if not held.any():
             return
+        # a finger plucks away from the bridge: at a contact of beta ~ 1e-6 the grip would
+        # pull the string's last micrometres with an unbounded force (NaN audio)
+        given.beta = np.maximum(given.beta, PLUCK_MIN_BETA)
         given.contact = np.where(held, CONTACT_GRIP, given.contact).astype(np.int8)
         given.bow_velocity = np.where(held, PLUCK_SPEED, given.bow_velocity)
 

@@ -12,8 +12,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from data_schemas.errors import ParameterError
 from synth.engines import DEFAULT_ENGINE, Engine, get_engine
 from synth.tracks import DEFAULT_TAIL
+
+#: A render louder than this (times full scale) is an error, not a file: bowing in the
+#: documented ranges peaks below about 6x and playing below 1.
+AUDIO_CEILING = 16.0
 
 
 def _engine(instrument: str | Engine, engine: str, sample_rate: int, seed: int,
@@ -107,5 +112,36 @@ def render_with_diagnostics(
     """
     options = {"oversample": oversample, "body": body, "body_seed": body_seed}
     inst = _engine(instrument, engine, sample_rate, seed, options)
-    return inst.render(actions, tail=tail, progress=progress,
-                       diagnostics=diagnostics and inst.has_diagnostics)
+    audio, table = inst.render(actions, tail=tail, progress=progress,
+                               diagnostics=diagnostics and inst.has_diagnostics)
+    check_audio(audio)
+    return audio, table
+
+
+def check_audio(audio: np.ndarray, ceiling: float = AUDIO_CEILING) -> None:
+    """Refuse audio that is not finite or peaks above ``ceiling`` (full scale = 1).
+
+    Raises
+    ------
+    ParameterError
+        With the sample and its time, so a bad actions table never becomes a file.
+
+    Examples
+    --------
+    >>> check_audio(np.array([0.0, 0.5, -0.9], np.float32))
+    >>> check_audio(np.array([0.0, 0.1, 20.0]))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: the rendered audio peaks at 20 x full scale ...
+    """
+    bad = ~np.isfinite(audio)
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise ParameterError(f"the rendered audio is not finite from sample {first} "
+                             f"({first / 44100:.3f} s at 44100 Hz)")
+    peak = float(np.max(np.abs(audio))) if audio.size else 0.0
+    if peak > ceiling:
+        first = int(np.flatnonzero(np.abs(audio) > ceiling)[0])
+        raise ParameterError(f"the rendered audio peaks at {peak:.3g} x full scale (ceiling "
+                             f"{ceiling:g}) from sample {first}: check the actions' forces and "
+                             "beta")

@@ -71,3 +71,20 @@ def test_wrong_table_version_and_corrupt_files_are_named(tmp_path):
     pq.write_table(old, tmp_path / "old.parquet")
     with pytest.raises(SchemaError, match="incompatible"):
         read_actions(tmp_path / "old.parquet")
+
+
+def test_the_documented_maximum_finger_ratio_is_accepted_as_float32_stores_it():
+    """0.8 becomes 0.800000011920929 in float32: the limit the schema documents still holds."""
+    import numpy as np
+    import pandas as pd
+
+    from data_schemas.actions import validate_actions
+
+    table = pd.DataFrame({"time": [0.0, 0.5], "string": [1, 1], "finger_ratio": [0.8, 0.8],
+                          "bow_force": [1.0, 1.0], "bow_velocity": [0.3, 0.3],
+                          "beta": [0.1, 0.1], "bow_position": [0.2, 0.5],
+                          "pluck": [False, False]})
+    checked = validate_actions(table)
+    assert np.float32(checked["finger_ratio"].iloc[0]) == np.float32(0.8)
+    with pytest.raises(SchemaError, match="finger_ratio"):
+        validate_actions(table.assign(finger_ratio=[0.8, 0.8001]))

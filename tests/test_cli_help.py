@@ -58,3 +58,17 @@ def test_version_comes_from_the_package_metadata():
     run = subprocess.run([sys.executable, "-m", "pipelines.cli.main", "--version"],
                          capture_output=True, text=True, timeout=60)
     assert run.returncode == 0 and run.stdout.strip() == f"arco {version('arco')}"
+
+
+@pytest.mark.parametrize("argv", [["synth", "a.csv", "-o", "o.wav", "--seed", "-1"],
+                                  ["synth", "a.csv", "-o", "o.wav", "--body-seed", "-1"],
+                                  ["simulate-recordings", "-o", "r", "--notes-per-take", "0"],
+                                  ["build-db", "r", "-o", "db", "--workers", "0"]])
+def test_negative_seeds_and_zero_counts_are_one_line_usage_errors(argv, capsys):
+    from pipelines.cli.main import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "is not an integer >=" in err[-1] and "Traceback" not in "".join(err)

@@ -154,3 +154,10 @@ def test_importers_mapping_and_actions(recordings, tmp_path):
     m = build_database([tmp_path / "mocap.toml"], tmp_path / "db", workers=1, progress=False)
     assert m["n_notes"] > 20  # blind segmentation, unlabelled groups
     assert all(g.startswith("unlabelled-") for g in m["files"]["notes"])
+
+
+def test_zero_notes_per_take_is_refused_instead_of_looping(tmp_path):
+    from data_schemas.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="notes_per_take=0"):
+        simulate_recordings(10, 1, tmp_path, notes_per_take=0, progress=False)

@@ -114,3 +114,21 @@ def test_borodin_pizzicato_double_stops_each_sound_at_their_time():
     first = plucks.iloc[:4].reset_index(drop=True)
     for t, onset in zip(first["time"], release_times(actions, list(first["time"])), strict=True):
         assert abs(onset - t) <= 0.002, (t, onset)
+
+
+def test_a_pluck_at_the_bridge_stays_finite_and_bounded():
+    """Wave one: beta 1e-6 gave NaN audio, 1e-4 a peak of 400-800x full scale."""
+    for beta in (1e-6, 1e-4):
+        actions = pluck_rows([0.0], [1]).assign(beta=beta, bow_force=0.5)
+        audio = render_actions(actions, tail=0.3)
+        assert np.all(np.isfinite(audio)) and np.abs(audio).max() < 1.0
+
+
+def test_audio_that_is_not_finite_or_runs_away_is_an_error():
+    from data_schemas.errors import ParameterError
+    from synth.render import check_audio
+
+    with pytest.raises(ParameterError, match="not finite from sample 2"):
+        check_audio(np.array([0.0, 0.1, np.inf]))
+    with pytest.raises(ParameterError, match="peaks at 20"):
+        check_audio(np.array([0.0, 20.0]))

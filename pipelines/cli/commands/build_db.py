@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from pipelines.cli.types import positive_int
+
 
 def register(subparsers) -> None:
     """Add the ``build-db`` sub-command."""
@@ -15,7 +17,7 @@ def register(subparsers) -> None:
                    help="recording files (.parquet/.csv, actions tables, .toml mappings) "
                         "or directories")
     p.add_argument("-o", "--output", required=True, help="database directory")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=positive_int, default=None,
                    help="local worker processes (default: one per CPU; 1 runs in-process)")
     p.add_argument("--scheduler", default=None,
                    help="dask.distributed scheduler address (overrides --workers)")

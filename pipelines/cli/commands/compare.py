@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from pipelines.cli.types import non_negative_int
+
 DEFAULT_METHODS = "rules,feedback,sampling,sampling-open"
 
 
@@ -28,7 +30,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     which.add_argument("--all-parts", action="store_true", help="play every part and mix")
     which.add_argument("--start-measure", type=int, metavar="M", help="first measure")
     which.add_argument("--end-measure", type=int, metavar="M", help="last measure")
-    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
     p.add_argument("--sample-rate", type=int, default=44100, metavar="HZ",
                    help="audio sample rate in Hz")
     p.add_argument("--quiet", action="store_true", help="no progress lines")

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from pipelines.cli.help import RawDescriptionFormatter
+from pipelines.cli.types import non_negative_int, positive_int
 from pipelines.score.bundled import bundled_score
 from synth.strings import INSTRUMENT_NAMES
 
@@ -42,8 +43,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                               formatter_class=RawDescriptionFormatter)
     p.add_argument("-o", "--output", type=Path, default=Path("out"),
                    help="directory for the audio, plots and report")
-    p.add_argument("--seed", type=int, default=0, help="random seed of every step")
-    p.add_argument("--workers", type=int, default=2, help="worker processes")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed of every step")
+    p.add_argument("--workers", type=positive_int, default=2, help="worker processes")
     p.add_argument("--skip-learning", action="store_true",
                    help="only the instrument and the rules (no database, training, comparison)")
     p.set_defaults(func=run)

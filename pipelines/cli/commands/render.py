@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
+from pipelines.cli.types import non_negative_int
 from pipelines.methods.registry import METHODS, check_methods, get_method
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
@@ -51,7 +52,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     play = p.add_argument_group("performance")
     play.add_argument("--skill", type=int, default=3, metavar="0..3",
                       help="performer skill: 0 worst .. 3 exact")
-    play.add_argument("--seed", type=int, default=0, help="random seed")
+    play.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
     play.add_argument("--config", metavar="RULES.toml",
                       help="rules settings merged over the shipped defaults")
     out = p.add_argument_group("output")

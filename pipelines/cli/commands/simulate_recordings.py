@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from pipelines.cli.types import non_negative_int, positive_int
+
 
 def register(subparsers) -> None:
     """Add the ``simulate-recordings`` sub-command."""
@@ -12,10 +14,10 @@ def register(subparsers) -> None:
         description="Play recording scripts (scales and exercises over articulations, five "
                     "dynamics, contexts and four strings) with simulated performers; write "
                     "one recording and one annotation (with true boundaries) per take.")
-    p.add_argument("--notes", type=int, default=10000, help="total notes")
-    p.add_argument("--performers", type=int, default=3, help="performer styles")
-    p.add_argument("--seed", type=int, default=0, help="random seed")
-    p.add_argument("--notes-per-take", type=int, default=500, help="notes per take file")
+    p.add_argument("--notes", type=positive_int, default=10000, help="total notes")
+    p.add_argument("--performers", type=positive_int, default=3, help="performer styles")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    p.add_argument("--notes-per-take", type=positive_int, default=500, help="notes per take file")
     p.add_argument("--frame-rate", type=float, default=240.0, help="frames/s, 200-240")
     p.add_argument("--performers-config", metavar="FILE",
                    help="TOML file of [[performer]] styles (name plus the fields that differ "

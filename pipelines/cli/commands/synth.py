@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
+from pipelines.cli.types import non_negative_int
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
 
@@ -22,14 +23,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="instrument that plays")
     p.add_argument("--engine", choices=engine_names(), default=DEFAULT_ENGINE,
                    help="synthesis engine (arco engines lists them)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the friction noise")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the friction noise")
     p.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000),
                    help="audio sample rate in Hz")
     p.add_argument("--oversample", type=int, choices=(1, 2, 4), default=None,
                    help="internal oversampling of the modal engine (default 2)")
     p.add_argument("--body", default="synthesized",
                    help="body impulse response: 'synthesized', 'none', or a WAV file")
-    p.add_argument("--body-seed", type=int, default=0,
+    p.add_argument("--body-seed", type=non_negative_int, default=0,
                    help="which synthesized body (an instrument keeps its body across seeds)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

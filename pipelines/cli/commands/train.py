@@ -7,6 +7,7 @@ import sys
 from dataclasses import replace
 
 from data_schemas.errors import ParameterError
+from pipelines.cli.types import non_negative_int, positive_int
 from synth.strings import INSTRUMENT_NAMES
 
 
@@ -23,7 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="who judges the clips (human labels override automatic ones)")
     p.add_argument("--labels", metavar="LABELS.parquet", help="human labels (labels table)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="model directory")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=positive_int, default=None,
                    help="local worker processes (default: one per CPU)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="dask.distributed scheduler address (pairs run on its workers)")
@@ -35,7 +36,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--listening-config", metavar="LISTENING.toml",
                    help="control law and teacher thresholds (default: "
                         "synth/listening/config/listening.toml)")
-    p.add_argument("--seed", type=int, default=0,
+    p.add_argument("--seed", type=non_negative_int, default=0,
                    help="random seed")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
