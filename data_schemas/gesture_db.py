@@ -23,6 +23,7 @@ import pyarrow as pa
 
 from data_schemas.errors import SchemaError
 from data_schemas.io import atomic_path
+from data_schemas.paths import inside
 from data_schemas.spec import Column, TableSpec
 
 GESTURE_DB_VERSION = "1.0"
@@ -164,8 +165,52 @@ def read_manifest(db_dir: str | os.PathLike) -> dict[str, Any]:
             f"schema version {version or '(none)'} of the gesture database is incompatible "
             f"with this Arco's version {GESTURE_DB_VERSION}; rebuild it with arco build-db",
             source=str(path), column="schema_version")
+    check_manifest_paths(manifest, db_dir)
     return manifest
 
 
+def check_manifest_paths(manifest: dict[str, Any], db_dir: str | os.PathLike) -> None:
+    """Refuse a manifest naming a file outside its database or a group that is not a name.
+
+    Every file the manifest lists (notes, models, contours) must resolve inside ``db_dir``,
+    and every group name must be a plain file name (it names plot and partition files).
+
+    Raises
+    ------
+    SchemaError
+        Naming ``manifest.json`` and the offending entry.
+
+    Examples
+    --------
+    >>> check_manifest_paths({"files": {"notes": {"a": "notes/a.parquet"},
+    ...                                 "models": "models/gen-1.parquet"}}, "db")
+    >>> check_manifest_paths({"files": {"notes": {"../../x": "notes/a.parquet"}}}, "db")
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.SchemaError: file db/manifest.json: group name '../../x' is not a plain name
+    """
+    source = Path(db_dir) / MANIFEST_NAME
+    files = manifest.get("files", {})
+    notes = files.get("notes", {}) if isinstance(files, dict) else None
+    if not isinstance(notes, dict):
+        raise SchemaError("files.notes is not an object", source=str(source))
+    for group, name in notes.items():
+        if not _plain_name(group):
+            raise SchemaError(f"group name {group!r} is not a plain name", source=str(source))
+        inside(db_dir, name, source=source)
+    if "models" in files:
+        inside(db_dir, files["models"], source=source)
+    sources = manifest.get("sources", {})
+    for entry in (sources.values() if isinstance(sources, dict) else ()):
+        for name in (entry.get("contour_files", ()) if isinstance(entry, dict) else ()):
+            inside(db_dir, name, source=source)
+
+
+def _plain_name(name: Any) -> bool:
+    """A non-empty name without separators, ``..`` or NUL (safe as one file name)."""
+    return (isinstance(name, str) and name not in ("", ".", "..")
+            and not any(c in name for c in "/\\\x00"))
+
+
 __all__ = ["DB_CONTOURS", "DB_GROUP_MODELS", "DB_NOTES", "GESTURE_DB_VERSION", "MANIFEST_NAME",
-           "read_manifest", "write_manifest"]
+           "check_manifest_paths", "read_manifest", "write_manifest"]

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from data_schemas.paths import inside
 from gesture_db.groups import CONTOUR_PARAMS
 from gesture_db.store import GestureDB
 
@@ -105,7 +106,7 @@ def plot_groups(db: GestureDB, out_dir: str | os.PathLike, *, progress: bool = T
         axes[0].set_title(f"{group} (n={n_notes}): mean +- 1 sd")
         axes[-1].set_xlabel("normalised time in the note")
         fig.tight_layout()
-        path = out / f"{group}.png"
+        path = inside(out, f"{group}.png")  # a group name never leaves the folder
         fig.savefig(path, dpi=80)
         plt.close(fig)
         paths.append(path)
