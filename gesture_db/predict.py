@@ -8,17 +8,18 @@ group). The context of a note (:data:`CONTEXT_COLUMNS`) is its duration, effecti
 length, string, dynamic and its neighbours in the same run (duration ratios and pitch
 intervals).
 
-The fitted predictors are stored beside the database under ``predictors/``
-(``gen-<generation>.pkl`` with ``gen-<generation>.json`` metadata: format version, database
-schema version and generation, scikit-learn version, per-group model and error). Only load
-predictor files you (or your build) wrote: they are Python pickles.
+The fitted predictors are stored beside the database under ``predictors/`` as numeric
+arrays only (``gen-<generation>.npz``, read with ``allow_pickle=False``: loading never runs
+code; see :mod:`gesture_db.regressor_arrays`) with ``gen-<generation>.json`` metadata:
+format version, database schema version and generation, scikit-learn version, per-group
+model and error. Predictors of format 1 (``gen-<generation>.pkl`` pickles) are refused
+unopened and fitted again.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import pickle
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,8 +31,11 @@ import pandas as pd
 from data_schemas.errors import ArcoError
 from data_schemas.gesture_db import GESTURE_DB_VERSION
 from data_schemas.io import atomic_path
+from data_schemas.paths import inside
+from gesture_db.regressor_arrays import predict_arrays, regressor_arrays
 
-PREDICTORS_VERSION = "1.0"
+#: 1.x: pickles (refused: loading a pickle can run code); 2.x: npz arrays + JSON.
+PREDICTORS_VERSION = "2.0"
 PREDICTORS_DIR = "predictors"
 #: Context inputs of the regressors, in column order.
 CONTEXT_COLUMNS = ("log2_duration", "effective_string_length", "string", "dynamic",
@@ -143,8 +147,9 @@ class GroupPredictor:
     ----------
     model : str
         Name of the chosen regressor (one of :data:`CANDIDATES`).
-    estimator : object
-        Fitted scikit-learn estimator: context (n, 10) -> features (n, k).
+    arrays : dict of str to np.ndarray
+        The fitted regressor as arrays (:func:`gesture_db.regressor_arrays.regressor_arrays`):
+        what is stored and what predicts, context (n, 10) -> features (n, k).
     feature_scale : np.ndarray [shape=(k,)]
         Standard deviation of each feature in the group (the PCA-normalised unit).
     mae : float
@@ -152,19 +157,24 @@ class GroupPredictor:
     scores : dict of str to float
         Cross-validated MAE of every candidate.
     n_notes, n_recordings : int
+    estimator : object or None
+        The fitted scikit-learn estimator the arrays came from: in memory after fitting only
+        (never stored; None after :func:`load_predictors`).
     """
 
     model: str
-    estimator: Any
+    arrays: dict[str, np.ndarray]
     feature_scale: np.ndarray
     mae: float
     scores: dict[str, float]
     n_notes: int
     n_recordings: int
+    estimator: Any = None
 
     def predict(self, context: np.ndarray) -> np.ndarray:
         """Predicted features (n, k) for a context matrix (n, 10)."""
-        out = np.asarray(self.estimator.predict(np.atleast_2d(context)), np.float64)
+        context = np.atleast_2d(np.asarray(context, np.float64))
+        out = predict_arrays(self.model, self.arrays, context)
         return out.reshape(len(context), -1)
 
 
@@ -289,7 +299,8 @@ def _fit_group(X: np.ndarray, F: np.ndarray, rec: np.ndarray, candidates: tuple[
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         est.fit(X, F)
-    return GroupPredictor(best, est, scale, mae, scores, len(F), n_rec)
+    return GroupPredictor(best, regressor_arrays(best, est), scale, mae, scores, len(F), n_rec,
+                          estimator=est)
 
 
 def _meta(db, groups: dict[str, GroupPredictor]) -> dict[str, Any]:
@@ -308,46 +319,91 @@ def _meta(db, groups: dict[str, GroupPredictor]) -> dict[str, Any]:
 
 
 def predictor_paths(db_path: str | os.PathLike, generation: int) -> tuple[Path, Path]:
-    """Pickle and metadata paths of the predictors of a database generation."""
-    base = Path(db_path) / PREDICTORS_DIR / f"gen-{generation}"
-    return base.with_suffix(".pkl"), base.with_suffix(".json")
+    """Arrays (``.npz``) and metadata paths of the predictors of a database generation."""
+    base = inside(db_path, f"{PREDICTORS_DIR}/gen-{int(generation)}")
+    return base.with_suffix(".npz"), base.with_suffix(".json")
 
 
 def save_predictors(predictors: Predictors, db_path: str | os.PathLike) -> Path:
-    """Write the predictors beside the database (atomically); returns the metadata path."""
-    pkl, meta = predictor_paths(db_path, int(predictors.meta["db_generation"]))
-    with atomic_path(pkl) as tmp:
+    """Write the predictors beside the database (atomically); returns the metadata path.
+
+    Arrays only (``.npz``); an old pickled ``gen-<generation>.pkl`` there is removed.
+    """
+    npz, meta_path = predictor_paths(db_path, int(predictors.meta["db_generation"]))
+    names = sorted(predictors.groups)
+    arrays: dict[str, np.ndarray] = {}
+    for i, group in enumerate(names):
+        p = predictors.groups[group]
+        arrays[f"g{i}__feature_scale"] = np.asarray(p.feature_scale, np.float64)
+        arrays.update({f"g{i}_{k}": np.asarray(v) for k, v in p.arrays.items()})
+    meta = {**predictors.meta, "format_version": PREDICTORS_VERSION, "array_groups": names}
+    with atomic_path(npz) as tmp:
         with open(tmp, "wb") as fh:
-            pickle.dump(predictors.groups, fh, protocol=pickle.HIGHEST_PROTOCOL)
-    with atomic_path(meta) as tmp:
-        tmp.write_text(json.dumps(predictors.meta, indent=1, sort_keys=True))
-    return meta
+            np.savez(fh, **arrays)
+    with atomic_path(meta_path) as tmp:
+        tmp.write_text(json.dumps(meta, indent=1, sort_keys=True))
+    npz.with_suffix(".pkl").unlink(missing_ok=True)
+    return meta_path
 
 
 def load_predictors(db) -> Predictors:
-    """Load the predictors of the database's current generation.
+    """Load the predictors of the database's current generation (arrays only, never a pickle).
 
     Raises
     ------
     PredictorError
-        None were saved for this generation, or they are of another format version.
+        None were saved for this generation, they are of another format version (the old
+        pickles are refused unopened), or their files are damaged.
     """
     generation = int(db.manifest["generation"])
-    pkl, meta_path = predictor_paths(db.path, generation)
-    if not pkl.exists() or not meta_path.exists():
+    npz, meta_path = predictor_paths(db.path, generation)
+    refit = (f"`arco render --method sampling --db {db.path} SCORE` fits and saves them "
+             f"again (so does a database rebuilt with `arco build-db`)")
+    if npz.with_suffix(".pkl").exists() and not npz.exists():
+        raise PredictorError(f"{npz.with_suffix('.pkl')}: predictors in the old pickle format, "
+                             f"which Arco no longer opens (loading a pickle can run code); "
+                             f"{refit}")
+    if not npz.exists() or not meta_path.exists():
         raise PredictorError(f"{db.path}: no predictors for database generation {generation} "
-                             f"(expected {pkl})")
-    meta = json.loads(meta_path.read_text())
-    version = str(meta.get("format_version", ""))
+                             f"(expected {npz})")
+    try:
+        meta = json.loads(meta_path.read_text())
+        version = str(meta.get("format_version", ""))
+    except (OSError, UnicodeDecodeError, ValueError, AttributeError) as exc:
+        raise PredictorError(f"{meta_path}: damaged predictors metadata ({exc})") from None
     if version.split(".")[0] != PREDICTORS_VERSION.split(".")[0]:
         raise PredictorError(f"{meta_path}: predictors format {version or '(none)'} is "
-                             f"incompatible with {PREDICTORS_VERSION}; refit them")
+                             f"incompatible with {PREDICTORS_VERSION}; {refit}")
     if int(meta.get("db_generation", -1)) != generation:
         raise PredictorError(f"{meta_path}: predictors are of generation "
                              f"{meta.get('db_generation')}, the database is at {generation}")
-    with open(pkl, "rb") as fh:
-        groups = pickle.load(fh)  # noqa: S301 - our own file beside the database
-    return Predictors(groups, meta)
+    return Predictors(_read_groups(npz, meta, refit), meta)
+
+
+def _read_groups(npz: Path, meta: dict[str, Any], refit: str) -> dict[str, GroupPredictor]:
+    """The groups' regressors from the arrays file, checked to predict."""
+    try:
+        with np.load(npz, allow_pickle=False) as data:
+            arrays = {k: np.asarray(data[k]) for k in data.files}
+        groups = {}
+        for i, group in enumerate(meta["array_groups"]):
+            info = meta["groups"][group]
+            own = {k.removeprefix(f"g{i}_"): v for k, v in arrays.items()
+                   if k.startswith(f"g{i}_")}
+            if any(v.dtype.kind not in "biuf" for v in own.values()):
+                raise ValueError("non-numeric arrays")
+            scale = own.pop("_feature_scale")
+            p = GroupPredictor(str(info["model"]), own, scale,
+                               float("nan") if info["mae"] is None else float(info["mae"]),
+                               dict(info["scores"]), int(info["n_notes"]),
+                               int(info["n_recordings"]))
+            if p.predict(np.zeros((1, len(CONTEXT_COLUMNS)))).shape != (1, scale.size):
+                raise ValueError(f"group {group}: predictions do not match its features")
+            groups[str(group)] = p
+    except Exception as exc:  # noqa: BLE001 -- any reading failure means a damaged file
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise PredictorError(f"{npz}: damaged predictors ({first}); {refit}") from None
+    return groups
 
 
 def load_or_fit_predictors(db, *, save: bool = True, progress: bool = False) -> Predictors:

@@ -46,7 +46,22 @@ def test_cv_accuracy_by_clip_of_the_d_string_mf_pair(models_dir):
     assert np.mean(predicted == y) >= 0.95
 
 
-def test_fast_predictor_agrees_with_sklearn(models_dir):
+@pytest.fixture(scope="module")
+def refit_pipeline():
+    """scikit-learn's scaler + SVC fitted again on the pair's training clips (in memory)."""
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+    from sklearn.svm import SVC
+
+    from pipelines.listening.train import pair_seed
+    from synth.listening.basic_training import basic_training
+
+    clips = basic_training("violin", *PAIR, settings=TINY, seed=pair_seed(0, *PAIR))
+    X, y, _ = clip_features(clips)
+    return make_pipeline(StandardScaler(), SVC(C=10.0, gamma="scale")).fit(X, y)
+
+
+def test_fast_predictor_agrees_with_sklearn(models_dir, refit_pipeline):
     from synth.listening.clips import ClipSpec, render_clip
     from synth.listening.training import JudgedClip
 
@@ -55,7 +70,7 @@ def test_fast_predictor_agrees_with_sklearn(models_dir):
                                     context=0.05), 0) for f in (0.05, 0.6, 6.0)]
     X, _, _ = clip_features(clips)
     fast = model.fast()
-    assert [fast(x) for x in X] == model.predict(X).tolist()
+    assert [fast(x) for x in X] == model.predict(X).tolist() == refit_pipeline.predict(X).tolist()
 
 
 def test_resume_skips_finished_pairs(models_dir):
@@ -67,16 +82,16 @@ def test_corrupted_model_gives_a_clear_error(models_dir, tmp_path, capsys):
     import shutil
 
     key = pair_key("violin", *PAIR)
-    for ext in ("joblib", "json"):
+    for ext in ("npz", "json"):
         shutil.copy(models_dir / f"{key}.{ext}", tmp_path / f"{key}.{ext}")
-    (tmp_path / f"{key}.joblib").write_bytes(b"not a pickle at all")
+    (tmp_path / f"{key}.npz").write_bytes(b"not an npz at all")
     with pytest.raises(ModelError, match="damaged model file"):
         load_pair(tmp_path, "violin", *PAIR)
     assert issubclass(ModelError, ArcoError)
     meta = json.loads((tmp_path / f"{key}.json").read_text())
-    meta["sklearn_version"] = "0.21.3"
+    meta["format"] = 1
     (tmp_path / f"{key}.json").write_text(json.dumps(meta))
-    with pytest.raises(ModelError, match="scikit-learn 0.21.3"):
+    with pytest.raises(ModelError, match="pickled .joblib.*arco train --instrument violin"):
         load_pair(tmp_path, "violin", *PAIR)
     (tmp_path / f"{key}.json").write_text("{broken")
     with pytest.raises(ModelError, match="damaged model metadata"):
@@ -96,11 +111,19 @@ def test_train_cli_rejects_bad_input(tmp_path, capsys):
     assert main(["train", "-o", str(tmp_path), "--pairs", "9:mf"]) == 2
 
 
-def test_fast_predictor_agrees_with_sklearn_near_the_boundaries(models_dir):
+def test_fast_predictor_agrees_with_sklearn_near_the_boundaries(models_dir, refit_pipeline):
+    """The stored arrays are those of scikit-learn refitted on the same clips, bit for bit,
+    and the loaded model decides as that pipeline does."""
+    from synth.listening.classifier import svc_arrays
+
     model = load_pair(models_dir, "violin", *PAIR)
-    scaler, svc = model.pipeline[0], model.pipeline[-1]
+    assert model.pipeline is None
+    pipeline = refit_pipeline
+    for name, array in svc_arrays(pipeline).items():
+        assert np.array_equal(model.arrays[name], array), name
+    scaler = pipeline[0]
     rng = np.random.default_rng(0)
-    sv = svc.support_vectors_
+    sv = pipeline[-1].support_vectors_
     i, j = rng.integers(0, sv.shape[0], (2, 20000))
     t = rng.uniform(size=(20000, 1))
     # Points on segments between support vectors (many close to a decision boundary) and
@@ -108,7 +131,7 @@ def test_fast_predictor_agrees_with_sklearn_near_the_boundaries(models_dir):
     z = np.vstack([sv[i] * t + sv[j] * (1 - t), 2.0 * rng.normal(size=(5000, sv.shape[1]))])
     X = z * scaler.scale_ + scaler.mean_
     fast = model.fast()
-    assert np.array_equal([fast(x) for x in X], model.predict(X))
+    assert np.array_equal([fast(x) for x in X], pipeline.predict(X))
 
 
 @pytest.mark.parametrize("labels", [[2, 4], [1, 3, 5]])

@@ -1,7 +1,7 @@
 """The training job: every string x dynamic pair of an instrument, in parallel, resumable.
 
 Each pair (:func:`train_one`) runs basic training with the chosen teacher, fits its
-classifier, searches K and the initial forces, and writes ``<instrument>-<s>-<dyn>.joblib``,
+classifier, searches K and the initial forces, and writes ``<instrument>-<s>-<dyn>.npz`` (arrays),
 its JSON metadata (``"complete": true`` last) and the pair's judged clips as a labels table
 ``labels/<key>.parquet``. A rerun skips complete pairs, so an interrupted run resumes.
 Pairs run on local worker processes, or on a dask.distributed cluster given its address.
@@ -22,7 +22,7 @@ import pandas as pd
 from data_schemas.errors import ParameterError
 from data_schemas.labels import AUTO_LABELLER, merge_labels, read_labels, write_labels
 from synth.listening.basic_training import JudgedClip
-from synth.listening.classifier import DYNAMICS, pair_key, save_pair
+from synth.listening.classifier import DYNAMICS, MODEL_FORMAT, pair_key, save_pair
 from synth.listening.training_settings import DEFAULT_LANES, TrainingSettings
 
 TEACHERS = ("auto", "human", "both")
@@ -39,13 +39,18 @@ def pair_seed(seed: int, string: int, dynamic: str) -> int:
 
 
 def is_complete(out_dir: str | os.PathLike, key: str) -> bool:
-    """Whether a pair finished training (its JSON says ``complete``)."""
+    """Whether a pair finished training in this model format (its JSON says ``complete``).
+
+    A pair of an older format (the pickled ``.joblib`` models) is not complete: a rerun
+    trains it again in the current format.
+    """
     import json
 
     path = Path(out_dir) / f"{key}.json"
     try:
-        return bool(json.loads(path.read_text("utf-8")).get("complete"))
-    except (OSError, ValueError):
+        meta = json.loads(path.read_text("utf-8"))
+        return bool(meta.get("complete")) and meta.get("format") == MODEL_FORMAT
+    except (OSError, ValueError, AttributeError):
         return False
 
 

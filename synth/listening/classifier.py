@@ -1,11 +1,15 @@
-"""Per string x dynamic classifiers: scaler + SVC on hop features, persisted with metadata.
+"""Per string x dynamic classifiers: scaler + SVC on hop features, persisted as arrays.
 
-Each pair's model is a joblib file ``<instrument>-<string>-<dynamic>.joblib`` with a JSON
-file beside it (same stem) holding the feature names, the scikit-learn version, a hash of the
+Each pair's model is an ``.npz`` file ``<instrument>-<string>-<dynamic>.npz`` holding only
+numeric arrays (the scaler's mean and scale, the SVC's support vectors, libsvm's dual
+coefficients and intercepts, the support counts, the classes and gamma; read with
+``allow_pickle=False``, so loading can never run code) and a JSON file beside it (same
+stem) holding the feature names, the scikit-learn version that trained it, a hash of the
 training data, the 10-fold cross-validated accuracy and the trained control parameters (K
-and the initial forces at fingers 0, 4 and 7 semitones). Loading checks the JSON first, so a
-model saved by an incompatible scikit-learn or a damaged file gives a one-line
-:class:`ModelError`.
+and the initial forces at fingers 0, 4 and 7 semitones). The predictor is rebuilt from the
+arrays (:class:`FastPredictor`); scikit-learn is needed to train, not to load or play.
+Loading checks the JSON first, so a model of another format (the old ``.joblib`` pickles
+are refused, never opened) or a damaged file gives a one-line :class:`ModelError`.
 """
 
 from __future__ import annotations
@@ -22,10 +26,15 @@ import numpy as np
 
 from data_schemas.errors import ArcoError, ParameterError
 from data_schemas.io import atomic_path
+from data_schemas.paths import inside
 from synth.listening.features import FEATURE_NAMES
 from synth.listening.svm_kernel import check_svc_model, svc_predict_unchecked
 
-MODEL_FORMAT = 1
+#: 1: joblib pickles (refused since they can run code on load); 2: npz arrays + JSON.
+MODEL_FORMAT = 2
+#: The arrays of a stored model (:func:`svc_arrays`), all numeric.
+SVC_ARRAYS = ("mean", "scale", "support_vectors", "dual_coef", "intercept", "n_support",
+              "classes", "gamma")
 #: The four dynamic lanes a pair can be trained for.
 DYNAMICS = ("p", "mp", "mf", "f")
 #: Finger positions (semitones above the open string) of the initial forces.
@@ -45,19 +54,24 @@ class PairModel:
     instrument : str
     string : int
     dynamic : str
-    pipeline : sklearn.pipeline.Pipeline
-        StandardScaler + SVC over :data:`FEATURE_NAMES`.
+    arrays : dict of str to np.ndarray
+        The classifier as arrays (:func:`svc_arrays`: StandardScaler + RBF SVC over
+        :data:`FEATURE_NAMES`); what is stored and what predicts.
     metadata : dict
         ``feature_names``, ``sklearn_version``, ``data_hash``, ``cv_accuracy``, ``n_clips``,
         ``n_hops``, ``class_counts``, ``force_range`` (N), ``K``, ``initial_forces`` (N at
         :data:`FINGERS`), ``velocity`` (m/s), ``beta``.
+    pipeline : sklearn.pipeline.Pipeline or None
+        The fitted scikit-learn pipeline the arrays came from: in memory after
+        :func:`fit_pair` only (never stored; None after :func:`load_pair`).
     """
 
     instrument: str
     string: int
     dynamic: str
-    pipeline: Any
+    arrays: dict
     metadata: dict = field(default_factory=dict)
+    pipeline: Any = None
 
     @property
     def key(self) -> str:
@@ -79,11 +93,50 @@ class PairModel:
 
     def predict(self, features: np.ndarray) -> np.ndarray:
         """Classes 1..5 of feature rows [shape=(n, n_features)] -> [shape=(n,)]."""
-        return self.pipeline.predict(np.atleast_2d(features)).astype(np.int64)
+        fast = self.fast()
+        rows = np.atleast_2d(np.asarray(features, np.float64))
+        return np.array([fast(x) for x in rows], np.int64).reshape(len(rows))
 
     def fast(self) -> FastPredictor:
         """A single-row predictor equivalent to :meth:`predict` (for the control loop)."""
-        return FastPredictor(self.pipeline)
+        return FastPredictor(self.arrays)
+
+
+def svc_arrays(pipeline: Any) -> dict[str, np.ndarray]:
+    """The arrays that define a fitted StandardScaler + RBF SVC pipeline (all numeric).
+
+    Parameters
+    ----------
+    pipeline : sklearn.pipeline.Pipeline
+        A fitted StandardScaler + SVC (RBF kernel, two or more classes).
+
+    Returns
+    -------
+    dict of str to np.ndarray
+        :data:`SVC_ARRAYS`: ``mean`` and ``scale`` of the scaler (feature units),
+        ``support_vectors`` (standardised), libsvm's own ``dual_coef`` and ``intercept``
+        (-rho; the public ones are negated for two classes), ``n_support`` per class,
+        ``classes`` and ``gamma`` (0-d, 1/standardised units squared).
+
+    Examples
+    --------
+    >>> from sklearn.pipeline import make_pipeline
+    >>> from sklearn.preprocessing import StandardScaler
+    >>> from sklearn.svm import SVC
+    >>> X = np.array([[0.0, 1.0], [1.0, 0.0], [0.1, 0.9], [0.9, 0.2]])
+    >>> a = svc_arrays(make_pipeline(StandardScaler(), SVC()).fit(X, [1, 2, 1, 2]))
+    >>> sorted(a) == sorted(SVC_ARRAYS), a["classes"].tolist()
+    (True, [1, 2])
+    """
+    scaler, svc = pipeline[0], pipeline[-1]
+    return {"mean": np.asarray(scaler.mean_, np.float64),
+            "scale": np.asarray(scaler.scale_, np.float64),
+            "support_vectors": np.asarray(svc.support_vectors_, np.float64),
+            "dual_coef": np.asarray(svc._dual_coef_, np.float64),
+            "intercept": np.asarray(svc._intercept_, np.float64),
+            "n_support": np.asarray(svc._n_support, np.int64),
+            "classes": np.asarray(svc.classes_, np.int64),
+            "gamma": np.asarray(float(svc._gamma), np.float64)}
 
 
 class FastPredictor:
@@ -97,23 +150,23 @@ class FastPredictor:
 
     Parameters
     ----------
-    pipeline : sklearn.pipeline.Pipeline
-        A fitted StandardScaler + SVC (RBF kernel, two or more classes).
+    model : dict of str to np.ndarray, or sklearn.pipeline.Pipeline
+        The arrays of :func:`svc_arrays` (as stored), or a fitted StandardScaler + SVC
+        (RBF kernel, two or more classes) to take them from.
     """
 
-    def __init__(self, pipeline: Any) -> None:
-        scaler, svc = pipeline[0], pipeline[-1]
-        self.mean = np.ascontiguousarray(scaler.mean_, np.float64)
-        self.scale = np.ascontiguousarray(scaler.scale_, np.float64)
-        self.sv = np.ascontiguousarray(svc.support_vectors_, np.float64)
+    def __init__(self, model: Any) -> None:
+        arrays = model if isinstance(model, dict) else svc_arrays(model)
+        self.mean = np.ascontiguousarray(arrays["mean"], np.float64)
+        self.scale = np.ascontiguousarray(arrays["scale"], np.float64)
+        self.sv = np.ascontiguousarray(arrays["support_vectors"], np.float64)
         self._sv_t = np.ascontiguousarray(self.sv.T)
-        self.gamma = float(svc._gamma)
-        # libsvm's own coefficients and -rho (the public ones are negated for two classes).
-        self.dual = np.ascontiguousarray(svc._dual_coef_, np.float64)
-        self.intercept = np.ascontiguousarray(svc._intercept_, np.float64)
-        self.classes = np.asarray(svc.classes_)
+        self.gamma = float(arrays["gamma"])
+        self.dual = np.ascontiguousarray(arrays["dual_coef"], np.float64)
+        self.intercept = np.ascontiguousarray(arrays["intercept"], np.float64)
+        self.classes = np.asarray(arrays["classes"])
         self._labels = self.classes.astype(np.int64)
-        counts = np.asarray(svc._n_support, np.int64)
+        counts = np.asarray(arrays["n_support"], np.int64)
         self.starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         self._scratch = np.zeros(check_svc_model(self.mean, self.scale, self._sv_t, self.gamma,
                                                  self.dual, self.intercept, self.starts,
@@ -212,28 +265,28 @@ def fit_pair(features: np.ndarray, labels: np.ndarray, *, instrument: str, strin
         "n_hops": int(y.size),
         "class_counts": {int(c): int(n) for c, n in zip(classes, counts, strict=True)},
     }
-    return PairModel(instrument, int(string), dynamic, pipeline, meta)
+    return PairModel(instrument, int(string), dynamic, svc_arrays(pipeline), meta, pipeline)
 
 
 def save_pair(model: PairModel, directory: str | os.PathLike) -> Path:
-    """Write ``<key>.joblib`` and ``<key>.json`` atomically; return the JSON path."""
-    import joblib
-
+    """Write ``<key>.npz`` (arrays only) and ``<key>.json`` atomically; return the JSON path."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    with atomic_path(directory / f"{model.key}.joblib") as tmp:
-        joblib.dump(model.pipeline, tmp)
-    meta = {**model.metadata, "instrument": model.instrument, "string": model.string,
-            "dynamic": model.dynamic}
-    path = directory / f"{model.key}.json"
+    with atomic_path(inside(directory, f"{model.key}.npz")) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **{k: np.asarray(model.arrays[k]) for k in SVC_ARRAYS})
+    meta = {**model.metadata, "format": MODEL_FORMAT, "instrument": model.instrument,
+            "string": model.string, "dynamic": model.dynamic}
+    path = inside(directory, f"{model.key}.json")
     with atomic_path(path) as tmp:
         Path(tmp).write_text(json.dumps(meta, indent=2, default=float), "utf-8")
+    inside(directory, f"{model.key}.joblib").unlink(missing_ok=True)  # the old pickled model
     return path
 
 
 def update_metadata(directory: str | os.PathLike, key: str, **values: Any) -> None:
     """Merge ``values`` into a saved pair's JSON metadata (atomically)."""
-    path = Path(directory) / f"{key}.json"
+    path = inside(directory, f"{key}.json")
     meta = _read_json(path)
     meta.update(values)
     with atomic_path(path) as tmp:
@@ -254,42 +307,50 @@ def _read_json(path: Path) -> dict:
 
 def load_pair(directory: str | os.PathLike, instrument: str, string: int,
               dynamic: str) -> PairModel:
-    """Load one pair's model, checking format, scikit-learn version and features.
+    """Load one pair's model, checking format, features and arrays (never a pickle).
 
     Raises
     ------
     ModelError
-        Missing or damaged files, another format, an incompatible scikit-learn version, or
-        features this Arco does not compute.
+        Missing or damaged files, another format (the old pickled ``.joblib`` models are
+        refused unopened), features this Arco does not compute, or arrays that do not make
+        an RBF SVC.
     """
-    import joblib
-    import sklearn
-
     key = pair_key(instrument, string, dynamic)
     directory = Path(directory)
-    meta = _read_json(directory / f"{key}.json")
-    if meta.get("format") != MODEL_FORMAT:
-        raise ModelError(f"{directory / key}.json: model format {meta.get('format')!r} is not "
-                         f"{MODEL_FORMAT}; retrain with `arco train`")
-    saved = str(meta.get("sklearn_version", "?"))
-    if saved.split(".")[:2] != sklearn.__version__.split(".")[:2]:
-        raise ModelError(f"{directory / key}.joblib was saved by scikit-learn {saved}, this is "
-                         f"{sklearn.__version__}; retrain with `arco train`")
-    if meta.get("feature_names") != list(FEATURE_NAMES):
-        raise ModelError(f"{directory / key}.json: features {meta.get('feature_names')} differ "
-                         f"from this Arco's {list(FEATURE_NAMES)}; retrain with `arco train`")
-    path = directory / f"{key}.joblib"
-    if not path.exists():
-        raise ModelError(f"{path}: model file not found (train with `arco train`)")
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            pipeline = joblib.load(path)
-        pipeline[-1].support_vectors_  # noqa: B018 -- a fitted SVC at the end
-    except Exception as exc:  # noqa: BLE001 -- any unpickling failure means a damaged file
+        json_path = inside(directory, f"{key}.json")
+        path = inside(directory, f"{key}.npz")
+    except ArcoError as exc:
+        raise ModelError(str(exc)) from None
+    retrain = f"retrain with `arco train --instrument {instrument} -o {directory}`"
+    meta = _read_json(json_path)
+    if meta.get("format") != MODEL_FORMAT:
+        old = " (a pickled .joblib model, which Arco no longer opens: loading a pickle can " \
+              "run code)" if meta.get("format") == 1 else ""
+        raise ModelError(f"{json_path}: model format {meta.get('format')!r} is not "
+                         f"{MODEL_FORMAT}{old}; {retrain}")
+    if meta.get("feature_names") != list(FEATURE_NAMES):
+        raise ModelError(f"{json_path}: features {meta.get('feature_names')} differ "
+                         f"from this Arco's {list(FEATURE_NAMES)}; {retrain}")
+    if not path.exists():
+        raise ModelError(f"{path}: model file not found ({retrain})")
+    arrays = _read_arrays(path)
+    return PairModel(instrument, int(string), dynamic, arrays, meta)
+
+
+def _read_arrays(path: Path) -> dict[str, np.ndarray]:
+    """The :data:`SVC_ARRAYS` of a stored model, checked to make a predictor."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: np.asarray(data[k]) for k in SVC_ARRAYS}
+        if any(a.dtype.kind not in "fiu" for a in arrays.values()):
+            raise ValueError("non-numeric arrays")
+        FastPredictor(arrays)
+    except Exception as exc:  # noqa: BLE001 -- any reading failure means a damaged file
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ModelError(f"{path}: damaged model file ({first})") from None
-    return PairModel(instrument, int(string), dynamic, pipeline, meta)
+    return arrays
 
 
 def load_models(directory: str | os.PathLike, instrument: str,
@@ -307,6 +368,10 @@ def load_models(directory: str | os.PathLike, instrument: str,
         for d in DYNAMICS:
             if (directory / f"{pair_key(instrument, s, d)}.json").exists():
                 out[(s, d)] = load_pair(directory, instrument, s, d)
+    if not out and list(directory.glob(f"{instrument}-*.joblib")):
+        raise ModelError(f"{directory}: only old pickled {instrument} models (.joblib), which "
+                         f"Arco no longer opens (loading a pickle can run code); retrain with "
+                         f"`arco train --instrument {instrument} -o {directory}`")
     if not out:
         raise ModelError(f"{directory}: no trained {instrument} models "
                          f"(run `arco train --instrument {instrument} -o {directory}`)")
