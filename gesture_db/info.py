@@ -94,6 +94,7 @@ def plot_groups(db: GestureDB, out_dir: str | os.PathLike, *, progress: bool = T
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for group in tqdm(db.groups, desc="plots", unit="group", disable=not progress):
+        path = inside(out, f"{group}.png")  # a group name never leaves the folder
         stats = mean_contours(db, group)
         n_notes = len(db.notes(group))
         fig, axes = plt.subplots(3, 1, figsize=(6, 6), sharex=True)
@@ -106,7 +107,6 @@ def plot_groups(db: GestureDB, out_dir: str | os.PathLike, *, progress: bool = T
         axes[0].set_title(f"{group} (n={n_notes}): mean +- 1 sd")
         axes[-1].set_xlabel("normalised time in the note")
         fig.tight_layout()
-        path = inside(out, f"{group}.png")  # a group name never leaves the folder
         fig.savefig(path, dpi=80)
         plt.close(fig)
         paths.append(path)
