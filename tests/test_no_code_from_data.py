@@ -219,3 +219,34 @@ def test_plots_never_leave_the_plots_folder(tmp_path):
     with pytest.raises(SchemaError, match="outside"):
         plot_groups(stub, tmp_path / "a" / "b" / "plots", progress=False)
     assert not list(tmp_path.rglob("*.png"))
+
+
+def test_render_with_default_db_and_models_folders_opens_no_pickle(tiny_db, tmp_path,
+                                                                    monkeypatch, capsys):
+    """``arco render`` with no flag picks up ./db and ./models: crafted pickles in both are
+    refused (the predictors refitted, the models named with the command rebuilding them)."""
+    from _notation_score import write_score
+
+    from gesture_db.store import GestureDB
+    from pipelines.cli.main import main
+
+    score = write_score(tmp_path)
+    work = tmp_path / "work"
+    shutil.copytree(tiny_db / "db", work / "db")
+    marker = tmp_path / "ran"
+    payload = crafted_pickle(marker)
+    db = GestureDB(work / "db")
+    npz, _ = predictor_paths(db.path, int(db.manifest["generation"]))
+    npz.unlink()
+    npz.with_suffix(".pkl").write_bytes(payload)
+    X, y = _svm_data()
+    models = work / "models"
+    save_pair(fit_pair(X, y, instrument="violin", string=1, dynamic="mf", folds=2), models)
+    (models / "violin-1-mf.npz").unlink()
+    (models / "violin-1-mf.joblib").write_bytes(payload)
+    _meta_format(models / "violin-1-mf.json", 1)
+    monkeypatch.chdir(work)
+    code = main(["render", str(score), "--end-measure", "1", "-o", "out.wav", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "pickle" in err and "arco train --instrument violin" in err
+    assert not marker.exists() and not (work / "out.wav").exists()
