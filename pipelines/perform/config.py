@@ -135,7 +135,7 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
 _VIBRATO_POSITIVE = ("rate", "onset_delay", "fade_in", "min_duration")
 _VIBRATO_NONNEGATIVE = ("extent", "rate_sigma", "extent_sigma", "performer_rate_sigma",
                         "performer_extent_sigma", "dynamic_rate", "dynamic_extent",
-                        "length_extent", "phrase_end_extent")
+                        "length_extent", "phrase_end_extent", "onset_share")
 
 
 def _number(value: Any) -> bool:

@@ -12,7 +12,8 @@ cents is stopped at ``finger_ratio(semitones + c / 100)``, i.e.
   a semitone down lower). Open strings cannot be re-tuned and keep 0.
 - :func:`assign_vibrato` / :func:`vibrato_cents`: a sine of ``rate`` (Hz) and peak
   ``extent`` (cents) that starts ``onset_delay`` after the note and fades in over
-  ``fade_in``; rate and extent depend on the dynamic, the note's length, its place in the
+  ``fade_in`` (on a short note each at most ``onset_share`` of its length: the vibrato of
+  a quick note starts sooner); rate and extent depend on the dynamic, the note's length, its place in the
   phrase, the performer (one draw per performance) and each note (one draw per note).
   Short notes get none; open strings none unless ``[vibrato] open_strings``.
 
@@ -161,8 +162,9 @@ def assign_vibrato(events: list, config: dict[str, Any], rng: np.random.Generato
             * float(np.exp(vib["extent_sigma"] * draws[1]))
         rate = performer_rate + vib["dynamic_rate"] * level + vib["rate_sigma"] * draws[0]
         e.vibrato = Vibrato(rate=float(np.clip(rate, 3.0, 9.0)), extent=max(float(extent), 0.0),
-                            phase=phase, start=e.t0 + vib["onset_delay"],
-                            fade=vib["fade_in"])
+                            phase=phase,
+                            start=e.t0 + min(vib["onset_delay"], vib["onset_share"] * length),
+                            fade=min(vib["fade_in"], vib["onset_share"] * length))
 
 
 def string_cents(e: Any, semitones: float, t: np.ndarray, config: dict[str, Any]) -> np.ndarray:
