@@ -13,9 +13,9 @@ cents is stopped at ``finger_ratio(semitones + c / 100)``, i.e.
 - :func:`assign_vibrato` / :func:`vibrato_cents`: a sine of ``rate`` (Hz) and peak
   ``extent`` (cents) that starts ``onset_delay`` after the note and fades in over
   ``fade_in`` (on a short note each at most ``onset_share`` of its length: the vibrato of
-  a quick note starts sooner); rate and extent depend on the dynamic, the note's length, its place in the
-  phrase, the performer (one draw per performance) and each note (one draw per note).
-  Short notes get none; open strings none unless ``[vibrato] open_strings``.
+  a quick note starts sooner); rate and extent depend on the dynamic, the note's length,
+  its place in the phrase, the performer (one draw per performance) and each note (one
+  draw per note). Short notes get none; open strings none unless ``[vibrato] open_strings``.
 
 Every draw comes from the ``rng`` the rules are given, so a seed fixes the performance.
 """
@@ -33,8 +33,11 @@ _MF = 5.0  # the dynamic level (0..9 scale) at which the configured rate and ext
 
 @dataclass(frozen=True)
 class Vibrato:
-    """One note's vibrato: ``rate`` (Hz), peak ``extent`` (cents), ``phase`` (rad), the
-    time it starts (``start``, s) and its fade-in (``fade``, s)."""
+    """One note's vibrato.
+
+    ``rate`` (Hz), peak ``extent`` (cents), ``phase`` (rad), the time it starts
+    (``start``, s) and its fade-in (``fade``, s).
+    """
 
     rate: float
     extent: float
@@ -168,8 +171,10 @@ def assign_vibrato(events: list, config: dict[str, Any], rng: np.random.Generato
 
 
 def string_cents(e: Any, semitones: float, t: np.ndarray, config: dict[str, Any]) -> np.ndarray:
-    """Vibrato (cents) of one string of event ``e`` at ``t`` (s): none on an open string
-    unless ``[vibrato] open_strings`` (then one-sided)."""
+    """Vibrato (cents) of one string of event ``e`` at ``t`` (s).
+
+    None on an open string unless ``[vibrato] open_strings`` (then one-sided).
+    """
     vibrato = getattr(e, "vibrato", None)
     if semitones <= _OPEN:
         if not config["vibrato"]["open_strings"]:

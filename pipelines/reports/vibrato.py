@@ -91,8 +91,10 @@ def note_contour(f0: np.ndarray, times: np.ndarray, start: float, end: float,
 
 
 def contour_figures(cents: np.ndarray, frame_rate: float) -> tuple[float, float, float]:
-    """(extent, rate, offset) of one note's contour: std after a linear detrend (cents),
-    strongest modulation in :data:`RATE_BAND` (Hz), median (cents).
+    """Extent, rate and offset of one note's pitch contour (cents at ``frame_rate`` Hz).
+
+    Extent: std after a linear detrend (cents); rate: the strongest modulation in
+    :data:`RATE_BAND` (Hz); offset: the median (cents).
 
     Examples
     --------
