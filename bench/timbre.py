@@ -16,7 +16,9 @@ notes of the first ``--seconds`` are played at their aligned times by
 and every source, the recording (``real``) included, is measured the same way by
 :func:`pipelines.reports.timbre.measure` (44.1 kHz mono, loudness-normalised, up to 14 kHz):
 MFCC-frame Frechet distance to the recording, spectral centroid, harmonics 6-10 and 11-20 re
-harmonic 1, flatness, harmonic-to-noise, octave-band LTAS (as render minus real). The
+harmonic 1, flatness, harmonic-to-noise, octave-band LTAS (as render minus real), and by
+:func:`pipelines.reports.vibrato.vibrato_figures` (YIN pitch of the monophonic notes of at
+least 0.31 s: share with vibrato >= 3 cents, extent, rate, intonation spread). The
 ``real`` entry's ``mfcc_frechet`` is the floor: the mean distance from that recording to the
 recordings of other performers (performer = file name up to the first ``_``).
 
@@ -40,11 +42,14 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from data_schemas.errors import ArcoError, ParameterError  # noqa: E402
-from pipelines.reports import baselines, recordings, timbre  # noqa: E402
+from pipelines.reports import baselines, recordings, timbre, vibrato  # noqa: E402
 
 SAMPLE_RATE = 44100
+VIBRATO = ("vibrato_share", "vibrato_extent_cents", "vibrato_rate_hz",
+           "intonation_spread_cents")
 SOURCES = ("real", "rules", "fluidr3", "sawtooth")
-FIGURES = ("mfcc_frechet", "centroid_hz", "h6_10_db", "h11_20_db", "flatness_db", "hnr_db")
+FIGURES = ("mfcc_frechet", "centroid_hz", "h6_10_db", "h11_20_db", "flatness_db", "hnr_db",
+           *VIBRATO)
 
 
 def say(*parts: Any) -> None:
@@ -74,7 +79,7 @@ def make_renderers(args: argparse.Namespace) -> dict[str, Any]:
     """Source name -> function(table, midi_path, n_samples) -> mono audio."""
     from pipelines.perform.config import load_config
 
-    config = load_config()
+    config = load_config(args.rules_config)
 
     def rules(table, midi, n):
         from pipelines.methods.rules import render
@@ -154,6 +159,7 @@ def measure_recording(rec: recordings.Recording, args: argparse.Namespace, rende
     real_audio = recordings.read_audio(rec.audio, seconds=args.seconds, sample_rate=SAMPLE_RATE)
     keep(args, rec, "real", real_audio, table)
     real = timbre.measure(real_audio, SAMPLE_RATE, table)
+    real.figures.update(vibrato.vibrato_figures(real_audio, SAMPLE_RATE, table))
     result: dict[str, Any] = {
         "audio": str(rec.audio), "notes": len(table), "dropped_notes": table.attrs["dropped"],
         "figures": {"real": {"mfcc_frechet": None, **real.figures}},
@@ -169,6 +175,7 @@ def measure_recording(rec: recordings.Recording, args: argparse.Namespace, rende
         result["render_seconds"][name] = time.perf_counter() - t0
         keep(args, rec, name, audio, table)
         m = timbre.measure(audio, SAMPLE_RATE, table)
+        m.figures.update(vibrato.vibrato_figures(audio, SAMPLE_RATE, table))
         result["figures"][name] = {"mfcc_frechet": timbre.frechet_distance(m.mfcc, real.mfcc),
                                    **m.figures}
         result["ltas_db"][name] = m.ltas_db
@@ -207,9 +214,12 @@ def mean_over(per: dict[str, dict]) -> dict[str, Any]:
     for s in sources:
         figures[s] = {}
         for f in FIGURES:
-            v = [r["figures"][s][f] for r in per.values()
-                 if s in r["figures"] and r["figures"][s][f] is not None]
-            figures[s][f] = float(np.mean(v)) if v else None
+            got = [r["figures"][s] for r in per.values()
+                   if s in r["figures"] and r["figures"][s][f] is not None]
+            # vibrato figures: pooled over the long notes (recordings weighted by their count)
+            w = [g.get("long_notes", 1) if f in VIBRATO else 1 for g in got]
+            figures[s][f] = float(np.average([g[f] for g in got], weights=w)) \
+                if got and sum(w) > 0 else None
         diffs = [r["ltas_diff_db"][s] for r in per.values() if s in r["ltas_diff_db"]]
         if diffs:
             ltas[s] = {b: float(np.nanmean([d[b] for d in diffs])) for b in diffs[0]}
@@ -230,6 +240,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--models", metavar="DIR", help="also render with the feedback method")
     p.add_argument("--db", metavar="DB", help="also render with the sampling method")
     p.add_argument("--seed", type=int, default=0, help="seed of Arco's renders (default 0)")
+    p.add_argument("--rules-config", metavar="TOML",
+                   help="rules configuration merged over the defaults (e.g. vibrato off)")
     args = p.parse_args(argv)
     if args.seconds <= 0:
         raise ParameterError(f"--seconds {args.seconds} must be > 0")

@@ -14,6 +14,9 @@ from pipelines.perform.rules import perform_part, string_force_factors
 from pipelines.score import read_score
 
 CFG = load_config()
+# The notation rules are tested exact: no intonation, no vibrato (tests/test_expression.py).
+CFG["vibrato"]["enabled"] = False
+CFG["intonation"].update(sigma=0.0, semitone_step=0.0)
 L = CFG["instruments"]["violin"]["bow_length"]
 FERMATA_SHIFT = 2.0 * (CFG["articulations"]["fermata_stretch"] - 1.0)
 

@@ -28,15 +28,22 @@ MF_RATIO = 0.33 / 0.10  # velocity / beta of the mezzo-forte lane
 SETTLE = 0.05  # s after a note's start before hops count as sustained
 SUSTAIN_SPEED = 0.9  # share of the note's top speed for a sustained hop
 STABLE_HOPS = 3  # consecutive Helmholtz hops that end an attack
+#: A finger move (semitones) from one row to the next that starts a new note; a vibrato
+#: moves the finger by a few cents a row (15 cents at 7 Hz: under 4 cents per 5 ms row).
+STEP = 0.25
 
 
 def find_notes(actions: pd.DataFrame, *, sample_rate: int = 44100) -> pd.DataFrame:
     """Bowed notes of an actions table.
 
+    A note ends at a bow change, a lift, or a finger step of more than :data:`STEP`
+    semitones between rows (a vibrato's gradual finger motion does not end it).
+
     Returns
     -------
     pandas.DataFrame
-        ``string``, ``semitones``, ``t0``, ``t1`` (s), ``first_hop``, ``last_hop`` (exclusive).
+        ``string``, ``semitones`` (at the note's first row), ``t0``, ``t1`` (s),
+        ``first_hop``, ``last_hop`` (exclusive).
     """
     rows = []
     for s, a in actions[~actions["pluck"]].groupby("string", sort=True):
@@ -50,7 +57,7 @@ def find_notes(actions: pd.DataFrame, *, sample_rate: int = 44100) -> pd.DataFra
         for i in range(t.size + 1):
             boundary = i == t.size or not on[i] or (
                 start is not None and (np.sign(v[i]) != np.sign(v[start])
-                                       or abs(semis[i] - semis[start]) > 0.05))
+                                       or abs(semis[i] - semis[i - 1]) > STEP))
             if boundary and start is not None:
                 end = t[min(i, t.size - 1)]
                 if end - t[start] >= 0.03:

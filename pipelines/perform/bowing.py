@@ -20,6 +20,7 @@ from data_schemas.bow import BowBudget
 from data_schemas.instruments import finger_ratio, limits
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Event
+from pipelines.perform.expression import string_cents
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
             "bow_position", "pluck")
@@ -303,7 +304,7 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
             m = t >= sustain_from if n_roll else np.ones(t.shape, bool)
             for string, semis in zip(e.strings, e.semitones, strict=True):
                 rows.append(_rows(t[m], string, semis, force[m], s.direction * speed[m],
-                                  beta[m], pos[m]))
+                                  beta[m], pos[m], cents=string_cents(e, semis, t[m], config)))
             if k == last:
                 rows.extend(_after_stroke(events, k, t, force, beta, pos))
             elif t.size:
@@ -324,10 +325,13 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
 
 
 def _rows(t: np.ndarray, string: int, semis: float, force: np.ndarray, velocity: np.ndarray,
-          beta: np.ndarray, pos: np.ndarray, pluck: bool = False) -> dict[str, np.ndarray]:
+          beta: np.ndarray, pos: np.ndarray, pluck: bool = False,
+          cents: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Rows of one string; ``cents`` (vibrato) bends the finger row by row."""
     n = t.size
+    pitch = np.full(n, semis) if cents is None else semis + np.asarray(cents) / 100.0
     return {"time": t, "string": np.full(n, string, np.int8),
-            "finger_ratio": np.full(n, min(finger_ratio(semis), _MAX_FINGER), np.float32),
+            "finger_ratio": np.minimum(finger_ratio(pitch), _MAX_FINGER).astype(np.float32),
             "bow_force": np.maximum(force, 0.0), "bow_velocity": velocity, "beta": beta,
             "bow_position": pos, "pluck": np.full(n, pluck)}
 

@@ -124,11 +124,52 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
     for key, value in config["bow_regions"].items():
         if not isinstance(value, int | float) or not 0 <= value <= 1:
             raise ParameterError(f"{source}: bow_regions.{key}={value!r} must be in [0, 1]")
+    _validate_expression(config, source)
     for key in ("pitch_sigma", "onset_sigma"):
         values = config["skill"][key]
         if len(values) != 4 or any(v < 0 for v in values):
             raise ParameterError(f"{source}: skill.{key} must hold 4 numbers >= 0 "
                                  f"(levels 0..3), got {values!r}")
+
+
+_VIBRATO_POSITIVE = ("rate", "onset_delay", "fade_in", "min_duration")
+_VIBRATO_NONNEGATIVE = ("extent", "rate_sigma", "extent_sigma", "performer_rate_sigma",
+                        "performer_extent_sigma", "dynamic_rate", "dynamic_extent",
+                        "length_extent", "phrase_end_extent", "onset_share")
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and \
+        bool(np.isfinite(value))
+
+
+def _validate_expression(config: dict[str, Any], source: str) -> None:
+    """``[vibrato]`` and ``[intonation]``: numbers in range, switches boolean."""
+    vib = config["vibrato"]
+    for key in ("enabled", "open_strings"):
+        if not isinstance(vib[key], bool):
+            raise ParameterError(f"{source}: vibrato.{key}={vib[key]!r} must be true or false")
+    for key in _VIBRATO_POSITIVE:
+        _positive(config, "vibrato", key, source, upper=20.0)
+    for key in _VIBRATO_NONNEGATIVE:
+        if not _number(vib[key]) or vib[key] < 0:
+            raise ParameterError(f"{source}: vibrato.{key}={vib[key]!r} must be a number >= 0")
+    if not 3.0 <= vib["rate"] <= 9.0:
+        raise ParameterError(f"{source}: vibrato.rate={vib['rate']!r} must be in [3, 9] Hz")
+    if vib["extent"] > 100.0:
+        raise ParameterError(f"{source}: vibrato.extent={vib['extent']!r} must be <= 100 "
+                             "cents")
+    if vib["enabled"] and config["frames"]["interval"] > 1.0 / (8.0 * vib["rate"]):
+        raise ParameterError(f"{source}: frames.interval={config['frames']['interval']!r} s "
+                             f"is too coarse for a {vib['rate']} Hz vibrato (at most "
+                             f"{1.0 / (8.0 * vib['rate']):.4f} s: 8 frames a cycle)")
+    into = config["intonation"]
+    if not _number(into["sigma"]) or not 0 <= into["sigma"] <= 100:
+        raise ParameterError(f"{source}: intonation.sigma={into['sigma']!r} must be in "
+                             "[0, 100] cents")
+    if not _number(into["semitone_step"]) or abs(into["semitone_step"]) > 50:
+        raise ParameterError(f"{source}: intonation.semitone_step="
+                             f"{into['semitone_step']!r} must be in [-50, 50] cents")
 
 
 def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.ndarray:

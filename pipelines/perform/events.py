@@ -7,13 +7,17 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from pipelines.perform.expression import Vibrato
+
 
 @dataclass
 class Event:
     """Notes sounding together (one note, a double stop, a chord), with their articulation.
 
     Times are performance times in seconds. ``strings``/``semitones`` are the sustained
-    strings; ``roll`` lists (string, semitones) of lower chord notes played briefly first.
+    strings; ``roll`` lists (string, semitones) of lower chord notes played briefly first;
+    ``semitones`` include the note's intonation offset and ``vibrato`` is its finger's
+    vibrato (:mod:`pipelines.perform.expression`).
     """
 
     rows: list[int]
@@ -42,6 +46,7 @@ class Event:
     slur: float = np.nan
     slur_position: str = "iso"
     run_position: str = "iso"
+    vibrato: Vibrato | None = None
 
 
 @dataclass

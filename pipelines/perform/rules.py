@@ -25,6 +25,7 @@ import pandas as pd
 from data_schemas.actions import ACTIONS, validate_actions
 from data_schemas.instruments import instrument_facts
 from pipelines.perform.events import Event, Performance
+from pipelines.perform.expression import assign_vibrato, intonation_cents
 from pipelines.perform.instruments import choose_strings, fit_range
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
@@ -112,7 +113,7 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     skill : int
         Vivi skill level 0 (worst) .. 3 (exact).
     rng : numpy.random.Generator, optional
-        Source of the skill jitter.
+        Source of the intonation, skill jitter and vibrato draws (default: seed 0).
 
     Returns
     -------
@@ -123,12 +124,10 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     rng = rng or np.random.default_rng(0)
     onset = warp(notes["onset"].to_numpy())
     end = warp((notes["onset"] + notes["duration"]).to_numpy())
-    semis = strings["semitones"].to_numpy().copy()
-    pitch_sigma = config["skill"]["pitch_sigma"][skill]
-    if pitch_sigma > 0:
-        stopped = semis > 1e-6
-        semis[stopped] = np.maximum(semis[stopped] + rng.normal(0, pitch_sigma, stopped.sum()),
-                                    0.05)
+    semis = strings["semitones"].to_numpy().astype(np.float64)
+    stopped = semis > 1e-6
+    cents = intonation_cents(notes["midi_pitch"].to_numpy(), onset, stopped, config, skill, rng)
+    semis[stopped] = np.maximum(semis[stopped] + cents[stopped] / 100.0, 0.05)
     key = notes["onset_beats"].round(6).astype(str) + notes["grace"].astype(str)
     codes, _ = pd.factorize(key, sort=False)
     events: list[Event] = []
@@ -149,6 +148,7 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     _clip_times(events)
     events = _tremolo(events, cols, art["tremolo_stroke"])
     _articulate(events, cols, config)
+    assign_vibrato(events, config, rng)
     return events
 
 
@@ -365,7 +365,7 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
     skill : int
         Vivi skill level, 0 (worst) .. 3 (exact).
     rng : numpy.random.Generator, optional
-        Source of the skill jitter (default: seed 0).
+        Source of the intonation, vibrato and skill jitter (default: seed 0).
     warp : callable, optional
         Time map shared by all parts (fermatas); default: :func:`fermata_warp` of ``notes``.
     transpose_octaves : bool
