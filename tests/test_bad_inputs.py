@@ -6,6 +6,8 @@ Grouped by the reader that must catch the problem. Each test crafts the bad file
 
 from __future__ import annotations
 
+import re
+
 import mido
 import pytest
 
@@ -13,14 +15,22 @@ from pipelines.cli.main import main
 
 
 def _arco_fails(capsys, *argv: str) -> str:
-    """Run ``arco argv``; assert exit 2 with a single stderr line; return that line."""
+    """Run ``arco argv``; assert exit 2 with a single stderr line; return that line.
+
+    Progress-bar frames (tqdm's ``name:  0%|...``) are not error output and are dropped.
+    """
     capsys.readouterr()
     code = main([str(a) for a in argv])
-    err = capsys.readouterr().err.strip()
-    assert code == 2, err
-    assert "Traceback" not in err
-    assert len(err.splitlines()) == 1, err
-    return err
+    raw = capsys.readouterr().err
+    assert code == 2, raw
+    assert "Traceback" not in raw
+    lines = [line for line in re.split(r"[\r\n]+", _PROGRESS.sub("", raw)) if line.strip()]
+    assert len(lines) == 1, raw
+    assert lines[0].startswith(f"arco {argv[0]}: error: "), raw
+    return lines[0]
+
+
+_PROGRESS = re.compile(r"[\w -]+: +\d+%\|[^\r\n]*?(it|s|source|group)/s\]")
 
 
 # --- pipelines/score/midi.py -------------------------------------------------------------
@@ -83,3 +93,230 @@ def test_musicxml_good_metronome_still_reads(tmp_path, capsys):
     assert main(["notes", str(path)]) == 0
     # the first mark's tempo also applies before it: 8 beats at 30 qpm
     assert "16.0 s" in capsys.readouterr().out
+
+
+# --- data_schemas/io.py: Parquet metadata, CSV headers ----------------------------------
+
+
+def _recording(n: int = 480, rate: float = 240.0, rid: str = "take"):
+    import numpy as np
+    import pandas as pd
+
+    return pd.DataFrame({
+        "recording_id": rid, "time": np.arange(n) / rate,
+        "bow_velocity": 0.2 * np.sin(np.arange(n) / 50.0), "bow_force": 0.5, "beta": 0.1,
+        "bow_position": 0.5, "string": np.int8(2), "finger_ratio": np.float32(0.0)})
+
+
+def _with_metadata(tmp_path, key: bytes, value: bytes):
+    import pyarrow.parquet as pq
+
+    from data_schemas.recording import write_recording
+
+    good = write_recording(_recording(), tmp_path / "good.parquet")
+    table = pq.read_table(good)
+    path = tmp_path / "bad.parquet"
+    pq.write_table(table.replace_schema_metadata({**table.schema.metadata, key: value}), path)
+    return path
+
+
+@pytest.mark.parametrize("key", [b"arco_table", b"instrument"])
+def test_parquet_metadata_not_utf8(tmp_path, capsys, key):
+    path = _with_metadata(tmp_path, key, b"\xff\xfe")
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
+    assert str(path) in err and f"metadata '{key.decode()}' is not UTF-8" in err
+
+
+@pytest.mark.parametrize("key", [b"arco_table", b"arco_schema_version"])
+def test_read_table_metadata_not_utf8(tmp_path, key):
+    from data_schemas.errors import SchemaError
+    from data_schemas.recording import read_recording
+
+    path = _with_metadata(tmp_path, key, b"\xff\xfe")
+    with pytest.raises(SchemaError, match=f"bad.parquet: metadata '{key.decode()}' is not UTF-8"):
+        read_recording(path)
+
+
+def test_csv_duplicated_header_names_the_column(tmp_path, capsys):
+    from data_schemas.errors import SchemaError
+    from data_schemas.recording import read_recording
+
+    path = tmp_path / "dup.csv"
+    text = _recording().to_csv(index=False).replace("beta", "bow_force", 1)
+    path.write_text(text)
+    with pytest.raises(SchemaError, match="column 'bow_force': the column name appears 2"):
+        read_recording(path)
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
+    assert str(path) in err and "'bow_force'" in err and "2 times" in err
+
+
+def test_mapped_export_duplicated_header(tmp_path, capsys):
+    path = tmp_path / "export.csv"
+    path.write_text("t,v,v\n0,0.1,0.2\n")
+    mapping = tmp_path / "take.toml"
+    mapping.write_text('[source]\npath = "export.csv"\n[columns]\ntime = "t"\n')
+    err = _arco_fails(capsys, "build-db", mapping, "-o", tmp_path / "db", "--workers", "1")
+    assert str(path) in err and "'v'" in err and "2 times" in err
+
+
+# --- data_schemas/recording.py: the 200-240 Hz frame rate --------------------------------
+
+
+@pytest.mark.parametrize("rate", [10.0, 100.0, 10000.0])
+def test_recording_frame_rate_outside_200_240_hz(tmp_path, capsys, rate):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from data_schemas.errors import SchemaError
+    from data_schemas.recording import RECORDING, write_recording
+
+    path = tmp_path / "take.parquet"
+    good = write_recording(_recording(), tmp_path / "ok" / "good.parquet")
+    bad = _recording(int(2 * rate), rate)
+    with pytest.raises(SchemaError, match="outside 200-240 Hz"):
+        write_recording(bad, tmp_path / "refused.parquet")
+    pq.write_table(pa.Table.from_pandas(bad, schema=RECORDING.schema, preserve_index=False),
+                   path)
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
+    assert str(path) in err and "'time'" in err and f"{rate:g} Hz" in err
+    assert "200-240 Hz" in err
+    assert main(["build-db", str(good), "-o", str(tmp_path / "db2"), "--workers", "1"]) == 0
+
+
+def test_recording_times_all_equal(tmp_path, capsys):
+    path = tmp_path / "take.csv"
+    frame = _recording()
+    frame["time"] = 0.0
+    frame.to_csv(path, index=False)
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
+    assert str(path) in err and "'time'" in err and "do not advance" in err
+
+
+def test_recording_frame_rate_checked_per_take():
+    import pandas as pd
+
+    from data_schemas.errors import SchemaError
+    from data_schemas.recording import validate_recording
+
+    two = pd.concat([_recording(rid="a"), _recording(100, 200.0, rid="b")], ignore_index=True)
+    assert len(validate_recording(two)) == 580
+    bad = pd.concat([_recording(rid="a"), _recording(100, 50.0, rid="b")], ignore_index=True)
+    with pytest.raises(SchemaError, match=r"row 480: take 'b': frame rate 50 Hz"):
+        validate_recording(bad)
+
+
+# --- data_schemas/annotation.py ----------------------------------------------------------
+
+
+def _annotation(onset: float = 0.2, offset: float = 1.5):
+    import pandas as pd
+
+    return pd.DataFrame({
+        "recording_id": ["take"], "note_index": [0], "onset": [onset], "offset": [offset],
+        "midi_pitch": [62], "string": [2], "finger_ratio": [0.0], "dynamic": [5.0],
+        "technique": ["detache"], "bow_direction": ["down"], "slur_position": ["iso"],
+        "run_position": ["iso"]})
+
+
+@pytest.mark.parametrize("offset", [0.1, 0.2])
+def test_annotation_offset_not_after_onset(tmp_path, capsys, offset):
+    from data_schemas.recording import write_recording
+
+    path = write_recording(_recording(), tmp_path / "take.parquet")
+    ann = tmp_path / "take.annotation.csv"
+    _annotation(0.2, offset).to_csv(ann, index=False)
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
+    assert str(ann) in err and "column 'offset', row 0" in err and "not after onset" in err
+
+
+def test_annotation_offset_after_the_take(tmp_path, capsys):
+    from data_schemas.recording import write_recording
+
+    path = write_recording(_recording(), tmp_path / "take.parquet")  # 2 s long
+    ann = tmp_path / "take.annotation.csv"
+    _annotation(0.2, 1e9).to_csv(ann, index=False)
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
+    assert str(ann) in err and "column 'offset', row 0" in err and "after the end of take" in err
+
+
+def test_annotation_checks_in_memory_and_on_write(tmp_path):
+    from data_schemas.annotation import validate_annotation, write_annotation
+    from data_schemas.errors import SchemaError
+
+    assert len(validate_annotation(_annotation())) == 1
+    with pytest.raises(SchemaError, match="row 0: offset 0.1 s is not after onset 0.2 s"):
+        validate_annotation(_annotation(0.2, 0.1))
+    with pytest.raises(SchemaError, match="not after onset"):
+        write_annotation(_annotation(0.2, 0.1), tmp_path / "a.parquet")
+    assert not (tmp_path / "a.parquet").exists()
+
+
+# --- gesture_db/importers.py: TOML column mappings ---------------------------------------
+
+_COLUMNS = """[columns]
+time = "t"
+bow_velocity = "v"
+bow_force = "f"
+beta = "b"
+[defaults]
+string = 2
+finger_ratio = 0.0
+bow_position = 0.5
+"""
+
+
+def _export(tmp_path):
+    """A motion-capture style CSV export with a text column ``label``."""
+    frame = _recording()
+    out = frame.rename(columns={"time": "t", "bow_velocity": "v", "bow_force": "f",
+                                "beta": "b"})[["t", "v", "f", "b"]]
+    out["label"] = "x"
+    out.to_csv(tmp_path / "export.csv", index=False)
+    (tmp_path / "folder").mkdir()
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    ('[source]\npath = 5\n' + _COLUMNS, "[source] path must be a file name in quotes, not 5"),
+    ('source = "x"\n' + _COLUMNS, "'source' must be a table ([source]), not 'x'"),
+    ('[source]\npath = "missing.csv"\n' + _COLUMNS, "[source] path 'missing.csv': file not found"),
+    ('[source]\npath = "folder"\n' + _COLUMNS, "[source] path 'folder' is a folder"),
+    ('[source]\npath = "export.csv"\n' + _COLUMNS + '[scale]\nbow_velocity = "abc"\n',
+     "column 'bow_velocity': [scale] bow_velocity must be a number, not 'abc'"),
+    ('[source]\npath = "export.csv"\n' + _COLUMNS + '[scale]\nbow_velocity = nan\n',
+     "[scale] bow_velocity must be a number, not nan"),
+    ('[source]\npath = "export.csv"\n' + _COLUMNS.replace('beta = "b"', "beta = 3"),
+     "column 'beta': [columns] beta must be a column name in quotes, not 3"),
+    ('[source]\npath = "export.csv"\n' + _COLUMNS.replace("string = 2", 'string = "G"'),
+     "column 'string': [defaults] string must be a number, not 'G'"),
+])
+def test_mapping_bad_values(tmp_path, capsys, text, expected):
+    _export(tmp_path)
+    mapping = tmp_path / "take.toml"
+    mapping.write_text(text)
+    err = _arco_fails(capsys, "build-db", mapping, "-o", tmp_path / "db", "--workers", "1")
+    assert f"file {mapping}" in err and expected in err
+
+
+def test_mapping_not_utf8(tmp_path, capsys):
+    _export(tmp_path)
+    mapping = tmp_path / "take.toml"
+    mapping.write_bytes(b'[source]\npath = "export\xff.csv"\n' + _COLUMNS.encode())
+    err = _arco_fails(capsys, "build-db", mapping, "-o", tmp_path / "db", "--workers", "1")
+    assert f"file {mapping}: cannot read mapping" in err
+
+
+def test_mapping_column_mapped_to_text(tmp_path, capsys):
+    _export(tmp_path)
+    mapping = tmp_path / "take.toml"
+    mapping.write_text('[source]\npath = "export.csv"\n'
+                       + _COLUMNS.replace('beta = "b"', 'beta = "label"'))
+    err = _arco_fails(capsys, "build-db", mapping, "-o", tmp_path / "db", "--workers", "1")
+    assert f"file {tmp_path / 'export.csv'}, column 'label', row 0: value 'x' is not a number" \
+        in err
+
+
+def test_mapping_good_export_builds(tmp_path, capsys):
+    _export(tmp_path)
+    mapping = tmp_path / "take.toml"
+    mapping.write_text('[source]\npath = "export.csv"\n' + _COLUMNS)
+    assert main(["build-db", str(mapping), "-o", str(tmp_path / "db"), "--workers", "1"]) == 0
