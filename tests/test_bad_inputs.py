@@ -320,3 +320,47 @@ def test_mapping_good_export_builds(tmp_path, capsys):
     mapping = tmp_path / "take.toml"
     mapping.write_text('[source]\npath = "export.csv"\n' + _COLUMNS)
     assert main(["build-db", str(mapping), "-o", str(tmp_path / "db"), "--workers", "1"]) == 0
+
+
+# --- data_schemas/gesture_db.py: the manifest -------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def small_db(tmp_path_factory):
+    """A database built from one 2 s take (its manifest is edited by the tests)."""
+    from data_schemas.recording import write_recording
+    from gesture_db.build import build_database
+
+    base = tmp_path_factory.mktemp("small_db")
+    rec = write_recording(_recording(), base / "take.parquet")
+    build_database([rec], base / "db", workers=1, progress=False)
+    return base / "db"
+
+
+@pytest.mark.parametrize(("edit", "expected"), [
+    (lambda m: m.pop("files"), "manifest key 'files' must be an object, not None"),
+    (lambda m: m.pop("sources"), "manifest key 'sources' must be an object, not None"),
+    (lambda m: m.pop("generation"), "manifest key 'generation' must be an integer >= 1"),
+    (lambda m: m.update(generation="abc"), "'generation' must be an integer >= 1, not 'abc'"),
+    (lambda m: m.update(generation=0), "'generation' must be an integer >= 1, not 0"),
+    (lambda m: m["files"].update(notes=["a.parquet"]), "'files.notes' must be an object"),
+    (lambda m: m["files"].update(models=3), "'files.models' must be a file name, not 3"),
+    (lambda m: next(iter(m["sources"].values())).update(contour_files="x.parquet"),
+     "contour_files' must be a list of file names, not 'x.parquet'"),
+])
+def test_manifest_bad_shape(small_db, tmp_path, capsys, edit, expected):
+    import json
+    import shutil
+
+    db = tmp_path / "db"
+    shutil.copytree(small_db, db)
+    manifest = json.loads((db / "manifest.json").read_text())
+    edit(manifest)
+    (db / "manifest.json").write_text(json.dumps(manifest))
+    err = _arco_fails(capsys, "db", "info", db, "--no-plots")
+    assert f"file {db / 'manifest.json'}: " in err and expected in err
+
+
+def test_manifest_good_reads(small_db, capsys):
+    assert main(["db", "info", str(small_db), "--no-plots", "--json"]) == 0
+    assert '"generation": 1' in capsys.readouterr().out
