@@ -364,3 +364,30 @@ def test_manifest_bad_shape(small_db, tmp_path, capsys, edit, expected):
 def test_manifest_good_reads(small_db, capsys):
     assert main(["db", "info", str(small_db), "--no-plots", "--json"]) == 0
     assert '"generation": 1' in capsys.readouterr().out
+
+
+# --- gesture_db/search_config.py --------------------------------------------------------
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    ("[weights]\ngesture = nan\n", "weights.gesture=nan must be a finite number"),
+    ("[weights]\nbasic = inf\n", "weights.basic=inf must be a finite number"),
+    ("[weights]\nbasic = true\n", "weights.basic=True must be a finite number"),
+    ('[continuity_scale]\nbeta = "x"\n', "continuity_scale.beta='x' must be a finite number"),
+    ("[fallback]\nmax_distance = nan\n", "fallback.max_distance=nan must be a finite number"),
+    ('[fallback.technique]\n"detache-legato" = -1.0\n',
+     "fallback.technique.detache-legato=-1.0 must be >= 0"),
+    ("[render]\nrecorded_reference_force = 1e300\n",
+     "render.recorded_reference_force=1e+300 must be <= 1e+06"),
+    ("[costs]\ndynamic_span = nan\n", "costs.dynamic_span=nan must be a finite number"),
+    ("n_best = true\n", "n_best=True must be an integer in 1..1024"),
+])
+def test_search_config_values_finite_and_sane(tmp_path, text, expected):
+    from data_schemas.errors import ParameterError
+    from gesture_db.search_config import load_search_config
+
+    path = tmp_path / "search.toml"
+    path.write_text(text)
+    with pytest.raises(ParameterError) as info:
+        load_search_config(path)
+    assert str(info.value) == f"search config {path}: {expected}"
