@@ -391,3 +391,53 @@ def test_search_config_values_finite_and_sane(tmp_path, text, expected):
     with pytest.raises(ParameterError) as info:
         load_search_config(path)
     assert str(info.value) == f"search config {path}: {expected}"
+
+
+# --- pipelines/perform/config.py: the rules config ---------------------------------------
+
+
+def _settings(config: dict, prefix: str = ""):
+    """Dotted names and values of every leaf setting."""
+    for key, value in config.items():
+        if isinstance(value, dict):
+            yield from _settings(value, f"{prefix}{key}.")
+        else:
+            yield f"{prefix}{key}", value
+
+
+def _toml_for(name: str, value: str) -> str:
+    section, key = name.rsplit(".", 1)
+    return f'[{section}]\n"{key}" = {value}\n'
+
+
+def test_rules_config_text_in_a_list_via_cli(tmp_path, capsys):
+    path = tmp_path / "rules.toml"
+    path.write_text('[dynamics]\nbeta = ["x", 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1]\n')
+    score = tmp_path / "tune.mid"
+    _midi(score)
+    err = _arco_fails(capsys, "render", score, "--method", "rules", "--actions",
+                      tmp_path / "a.parquet", "--config", path, "--quiet")
+    assert f"{path}: dynamics.beta must hold 10 numbers > 0" in err
+
+
+def _leaf_names():
+    from pipelines.perform.config import default_config
+
+    return [name for name, _ in _settings(default_config())]
+
+
+@pytest.mark.parametrize("name", _leaf_names())
+@pytest.mark.parametrize("value", ["1e300", "nan", '"abc"', "true"])
+def test_rules_config_every_value_finite_and_bounded(tmp_path, name, value):
+    from data_schemas.errors import ParameterError
+    from pipelines.perform.config import default_config, load_config
+
+    shipped = dict(_settings(default_config()))[name]
+    text = "[" + ", ".join([value] * len(shipped)) + "]" if isinstance(shipped, list) else value
+    path = tmp_path / "rules.toml"
+    path.write_text(_toml_for(name, text))
+    with pytest.raises(ParameterError) as info:
+        load_config(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ") and name.split(".")[-1] in message
+    assert "\n" not in message
