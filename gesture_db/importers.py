@@ -91,7 +91,7 @@ def resolve_sources(paths: list[str | os.PathLike]) -> list[Source]:
     Raises
     ------
     SchemaError
-        For a missing path or an unsupported file type.
+        For a missing path, a folder without recordings or an unsupported file type.
     """
     out: list[Source] = []
     for raw in paths:
@@ -99,6 +99,9 @@ def resolve_sources(paths: list[str | os.PathLike]) -> list[Source]:
         if p.is_dir():
             files = sorted(f for f in p.iterdir() if f.suffix.lower() in (*_DATA_SUFFIXES, ".toml")
                            and ".annotation." not in f.name)
+            if not files:
+                raise SchemaError("the folder holds no recordings (.parquet, .csv or .toml "
+                                  "mappings)", source=str(p))
             out += [_source_for(f) for f in files]
         elif p.exists():
             out.append(_source_for(p))

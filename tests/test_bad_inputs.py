@@ -441,3 +441,31 @@ def test_rules_config_every_value_finite_and_bounded(tmp_path, name, value):
     message = str(info.value)
     assert message.startswith(f"{path}: ") and name.split(".")[-1] in message
     assert "\n" not in message
+
+
+# --- gesture_db/build.py: sources and the scheduler --------------------------------------
+
+
+def test_build_db_empty_folder(tmp_path, capsys):
+    empty = tmp_path / "recordings"
+    empty.mkdir()
+    (empty / "notes.txt").write_text("not a recording")
+    err = _arco_fails(capsys, "build-db", empty, "-o", tmp_path / "db", "--workers", "1")
+    assert f"file {empty}: the folder holds no recordings" in err
+    assert not (tmp_path / "db").exists()
+
+
+def test_build_db_unreachable_scheduler(tmp_path, capsys, monkeypatch):
+    import time
+
+    from data_schemas.recording import write_recording
+    from gesture_db import build
+
+    monkeypatch.setattr(build, "CONNECT_TIMEOUT", "1s")
+    path = write_recording(_recording(), tmp_path / "take.parquet")
+    start = time.monotonic()
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--scheduler",
+                      "tcp://127.0.0.1:1")
+    assert "--scheduler tcp://127.0.0.1:1: cannot connect" in err
+    assert time.monotonic() - start < 10
+    assert not (tmp_path / "db").exists()
