@@ -469,3 +469,59 @@ def test_build_db_unreachable_scheduler(tmp_path, capsys, monkeypatch):
     assert "--scheduler tcp://127.0.0.1:1: cannot connect" in err
     assert time.monotonic() - start < 10
     assert not (tmp_path / "db").exists()
+
+
+# --- pipelines/cli/outputs.py: -o targets ------------------------------------------------
+
+
+@pytest.fixture()
+def taken(tmp_path):
+    """An existing file where an output folder is asked for."""
+    path = tmp_path / "taken"
+    path.write_text("x")
+    return path
+
+
+@pytest.mark.parametrize("argv", [
+    ("build-db", "{rec}", "-o", "{out}", "--workers", "1"),
+    ("simulate-recordings", "--notes", "4", "-o", "{out}"),
+    ("train", "--instrument", "violin", "-o", "{out}"),
+    ("compare", "{rec}", "-o", "{out}"),
+    ("demo", "-o", "{out}"),
+])
+@pytest.mark.parametrize("where", ["file", "below a file", "read-only"])
+def test_folder_outputs(tmp_path, capsys, monkeypatch, taken, argv, where):
+    import os
+
+    out = {"file": taken, "below a file": taken / "sub", "read-only": tmp_path / "ro" / "db"}
+    expected = {"file": "names an existing file, not a folder",
+                "below a file": f"{taken} is a file, not a folder",
+                "read-only": f"cannot write in the folder {tmp_path / 'ro'}"}
+    (tmp_path / "ro").mkdir()
+    if where == "read-only":  # tests may run as root, who may write anywhere
+        real = os.access
+        monkeypatch.setattr(os, "access", lambda p, mode: real(p, mode)
+                            and os.fspath(p) != os.fspath(tmp_path / "ro"))
+    rec = tmp_path / "take.parquet"
+    err = _arco_fails(capsys, *[a.format(rec=rec, out=out[where]) for a in argv])
+    assert f"-o {out[where]}: {expected[where]}" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ro", "taken"]
+
+
+@pytest.mark.parametrize("argv", [
+    ("notes", "{score}", "-o", "{out}"),
+    ("synth", "{actions}", "-o", "{out}"),
+    ("render", "{score}", "--method", "rules", "-o", "{out}"),
+    ("render", "{score}", "--method", "rules", "--actions", "{out}"),
+    ("render", "{score}", "--method", "rules", "--plot", "{out}"),
+])
+def test_file_outputs(tmp_path, capsys, taken, argv):
+    score = _midi(tmp_path / "tune.mid")
+    actions = tmp_path / "a.parquet"
+    folder = tmp_path / "folder.wav"
+    folder.mkdir()
+    for out, expected in ((folder, "is a folder, expected a file name"),
+                          (taken / "x.wav", f"{taken} is a file, not a folder")):
+        err = _arco_fails(capsys, *[a.format(score=score, actions=actions, out=out)
+                                    for a in argv])
+        assert f"{argv[argv.index('{out}') - 1]} {out}: {expected}" in err
