@@ -67,6 +67,11 @@ def process_source(source: Source, params: BuildParams,
         Concatenated over the source's takes.
     stats : dict
         Per-take statistics merged: recording ids, boundary errors, found counts.
+
+    Raises
+    ------
+    SchemaError
+        The source cannot be loaded, or none of its takes holds a note.
     """
     recording, annotation = load_source(source)
     instrument = source_instrument(source)
@@ -79,14 +84,18 @@ def process_source(source: Source, params: BuildParams,
             ann = annotation[annotation["recording_id"] == rid]
         n, c, s = extract_take(take, ann, source_hash=digest, source_path=str(source.path),
                                instrument=instrument, max_candidates=params.max_candidates)
-        notes.append(n)
-        contours.append(c)
+        if len(n):
+            notes.append(n)
+            contours.append(c)
         stats["recording_ids"].append(str(rid))
         stats["n_notes"] += s["n_notes"]
         for key in ("onset_errors", "offset_errors"):
             stats[key] += s.get(key, [])
         stats["found"] += s.get("found", 0)
         stats["n_true"] += s.get("n_true", 0)
+    if not notes:
+        raise SchemaError("no notes found in any take (the bow never starts or changes "
+                          "direction)", source=str(source.mapping or source.path))
     return (pd.concat(notes, ignore_index=True), pd.concat(contours, ignore_index=True),
             stats)
 

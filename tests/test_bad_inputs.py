@@ -455,6 +455,16 @@ def test_build_db_empty_folder(tmp_path, capsys):
     assert not (tmp_path / "db").exists()
 
 
+def test_build_db_recording_without_notes(tmp_path, capsys):
+    from data_schemas.recording import write_recording
+
+    frame = _recording()
+    frame["bow_velocity"] = 0.2  # one endless down-bow: no onset anywhere
+    path = write_recording(frame, tmp_path / "take.parquet")
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
+    assert f"file {path}: no notes found in any take" in err
+
+
 def test_build_db_unreachable_scheduler(tmp_path, capsys, monkeypatch):
     import time
 
