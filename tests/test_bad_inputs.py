@@ -59,6 +59,19 @@ def test_midi_tempo_zero_names_track_and_tick(tmp_path, capsys):
     assert str(path) in err and "track 0" in err and "tempo" in err
 
 
+def test_midi_time_signature_of_zero_beats(tmp_path, capsys):
+    mid = mido.MidiFile(ticks_per_beat=480)
+    track = mido.MidiTrack()
+    track.append(mido.MetaMessage("time_signature", numerator=0, denominator=4, time=0))
+    track.append(mido.Message("note_on", note=60, velocity=64, time=0))
+    track.append(mido.Message("note_off", note=60, velocity=0, time=480))
+    mid.tracks.append(track)
+    path = tmp_path / "meter0.mid"
+    mid.save(path)
+    err = _arco_fails(capsys, "notes", path)
+    assert f"{path}: track 0 tick 0: time signature 0/4" in err
+
+
 # --- pipelines/score/musicxml.py ---------------------------------------------------------
 
 _MUSICXML = """<?xml version="1.0" encoding="UTF-8"?>

@@ -100,6 +100,9 @@ def _read_track(track, t: int, tpb: float, path: Path, tempi: list[tuple[float, 
                                  "microseconds per beat (must be > 0)")
             tempi.append((beat, 60e6 / msg.tempo))
         elif msg.type == "time_signature":
+            if msg.numerator <= 0:
+                raise ScoreError(f"{path}: track {t} tick {tick}: time signature "
+                                 f"{msg.numerator}/{msg.denominator} (needs beats > 0)")
             meters.append((beat, 4.0 * msg.numerator / msg.denominator))
         elif msg.type == "track_name":
             name = msg.name.strip()
