@@ -157,6 +157,11 @@ def _read_toml(path: Path) -> dict:
         if not isinstance(cfg[section], dict):
             raise SchemaError(f"'{section}' must be a table ([{section}]), not "
                               f"{cfg[section]!r}", source=str(path))
+    for key in ("annotation", "recording_id", "instrument"):
+        value = cfg["source"].get(key)
+        if value is not None and not isinstance(value, str):
+            raise SchemaError(f"[source] {key} must be text in quotes, not {value!r}",
+                              source=str(path))
     for section, kind, what in (("columns", str, "a column name in quotes"),
                                 ("scale", (int, float), "a number"),
                                 ("defaults", (int, float), "a number")):

@@ -299,6 +299,8 @@ def _export(tmp_path):
      "[scale] bow_velocity must be a number, not nan"),
     ('[source]\npath = "export.csv"\n' + _COLUMNS.replace('beta = "b"', "beta = 3"),
      "column 'beta': [columns] beta must be a column name in quotes, not 3"),
+    ('[source]\npath = "export.csv"\nannotation = 1\n' + _COLUMNS,
+     "[source] annotation must be text in quotes, not 1"),
     ('[source]\npath = "export.csv"\n' + _COLUMNS.replace("string = 2", 'string = "G"'),
      "column 'string': [defaults] string must be a number, not 'G'"),
 ])
