@@ -67,6 +67,58 @@ ANNOTATION = TableSpec(
 )
 
 
+def _check_order(frame: pd.DataFrame, source: str) -> None:
+    """Every note ends after it starts (``offset > onset``, also for the ground truth)."""
+    from data_schemas.errors import SchemaError
+
+    for start, end in (("onset", "offset"), ("true_onset", "true_offset")):
+        if start not in frame or end not in frame:
+            continue
+        bad = (frame[end] <= frame[start]).to_numpy(dtype=bool, na_value=False)
+        if bad.any():
+            row = int(bad.nonzero()[0][0])
+            raise SchemaError(f"{end} {frame[end].iloc[row]} s is not after {start} "
+                              f"{frame[start].iloc[row]} s", source=source, column=end, row=row)
+
+
+def check_within_take(annotation: pd.DataFrame, ends: dict[str, float], source: str, *,
+                      slack: float = 1.0) -> None:
+    """Raise :class:`SchemaError` if a note ends after its take's last frame plus ``slack``.
+
+    Parameters
+    ----------
+    annotation : pandas.DataFrame
+        A validated annotation table.
+    ends : dict of str to float, s
+        Time of the last frame of each take (``recording_id``) of the recording.
+    source : str
+        Name used in error messages (the annotation file).
+    slack : float, s
+        How far past the last frame an aligned offset may lie.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> notes = pd.DataFrame({"recording_id": ["a", "a"], "offset": [1.0, 9.0]})
+    >>> check_within_take(notes.iloc[:1], {"a": 2.0}, "a.csv")
+    >>> check_within_take(notes, {"a": 2.0}, "a.csv")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.SchemaError: file a.csv, ... offset 9.0 s is after the end of take 'a' ...
+    """
+    from data_schemas.errors import SchemaError
+
+    for column in ("offset", "true_offset"):
+        if column not in annotation:
+            continue
+        for row, (rid, value) in enumerate(zip(annotation["recording_id"], annotation[column],
+                                               strict=True)):
+            end = ends.get(str(rid))
+            if end is not None and pd.notna(value) and value > end + slack:
+                raise SchemaError(f"{column} {value} s is after the end of take {rid!r} "
+                                  f"({end} s)", source=source, column=column, row=row)
+
+
 def validate_annotation(annotation: pd.DataFrame | pa.Table,
                         source: str = "<annotation>") -> pd.DataFrame:
     """Validate an in-memory annotation table and return it with canonical dtypes.
@@ -79,12 +131,15 @@ def validate_annotation(annotation: pd.DataFrame | pa.Table,
     """
     frame = ANNOTATION.conform(to_arrow(annotation), source=source).to_pandas()
     _check_labels(frame, source)
+    _check_order(frame, source)
     return frame
 
 
 def write_annotation(annotation: pd.DataFrame | pa.Table, path: str | os.PathLike) -> Path:
     """Validate and write an annotation table (``.parquet`` or ``.csv``) atomically."""
-    _check_labels(to_arrow(annotation).to_pandas(), str(path))
+    frame = to_arrow(annotation).to_pandas()
+    _check_labels(frame, str(path))
+    _check_order(frame, str(path))
     return write_table(annotation, path, ANNOTATION)
 
 
@@ -92,6 +147,7 @@ def read_annotation(path: str | os.PathLike) -> pd.DataFrame:
     """Read and validate an annotation table from ``.parquet`` or ``.csv``."""
     frame = read_frame(path, ANNOTATION)
     _check_labels(frame, str(path))
+    _check_order(frame, str(path))
     return frame
 
 
@@ -111,4 +167,4 @@ def _check_labels(frame: pd.DataFrame, source: str) -> None:
 
 
 __all__ = ["ANNOTATION", "ANNOTATION_VERSION", "DIRECTIONS", "POSITIONS", "TECHNIQUES",
-           "read_annotation", "validate_annotation", "write_annotation"]
+           "check_within_take", "read_annotation", "validate_annotation", "write_annotation"]

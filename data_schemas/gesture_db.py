@@ -147,8 +147,9 @@ def read_manifest(db_dir: str | os.PathLike) -> dict[str, Any]:
     Raises
     ------
     SchemaError
-        If the manifest is missing, not JSON, not a gesture-database manifest, or of an
-        incompatible schema version.
+        If the manifest is missing, not JSON, not a gesture-database manifest, of an
+        incompatible schema version, or lacks (or mistypes) ``generation``, ``files``
+        (``models``, ``notes``) or ``sources`` (each with ``contour_files``).
     """
     path = Path(db_dir) / MANIFEST_NAME
     if not path.exists():
@@ -165,6 +166,7 @@ def read_manifest(db_dir: str | os.PathLike) -> dict[str, Any]:
             f"schema version {version or '(none)'} of the gesture database is incompatible "
             f"with this Arco's version {GESTURE_DB_VERSION}; rebuild it with arco build-db",
             source=str(path), column="schema_version")
+    _check_shape(manifest, str(path))
     check_manifest_paths(manifest, db_dir)
     return manifest
 
@@ -210,6 +212,38 @@ def _plain_name(name: Any) -> bool:
     """A non-empty name without separators, ``..`` or NUL (safe as one file name)."""
     return (isinstance(name, str) and name not in ("", ".", "..")
             and not any(c in name for c in "/\\\x00"))
+
+
+def _fail(key: str, what: str, value: object, source: str) -> None:
+    shown = repr(value) if len(repr(value)) <= 60 else type(value).__name__
+    raise SchemaError(f"manifest key '{key}' must be {what}, not {shown}", source=source)
+
+
+def _check_shape(manifest: dict[str, Any], source: str) -> None:
+    """The keys a database reader relies on exist and have the right JSON types."""
+    generation = manifest.get("generation")
+    if isinstance(generation, bool) or not isinstance(generation, int) or generation < 1:
+        _fail("generation", "an integer >= 1", generation, source)
+    n_notes = manifest.get("n_notes", 0)
+    if isinstance(n_notes, bool) or not isinstance(n_notes, int) or n_notes < 0:
+        _fail("n_notes", "an integer >= 0", n_notes, source)
+    files = manifest.get("files")
+    if not isinstance(files, dict):
+        _fail("files", "an object", files, source)
+    if not isinstance(files.get("models"), str):
+        _fail("files.models", "a file name", files.get("models"), source)
+    notes = files.get("notes")
+    if not isinstance(notes, dict) or not all(isinstance(v, str) for v in notes.values()):
+        _fail("files.notes", "an object of group -> file name", notes, source)
+    sources = manifest.get("sources")
+    if not isinstance(sources, dict):
+        _fail("sources", "an object", sources, source)
+    for key, entry in sources.items():
+        contours = entry.get("contour_files") if isinstance(entry, dict) else None
+        if not isinstance(contours, list) or not all(isinstance(f, str) for f in contours):
+            _fail(f"sources.{key}.contour_files", "a list of file names", contours, source)
+    if not isinstance(manifest.get("segmentation", {}), dict):
+        _fail("segmentation", "an object", manifest["segmentation"], source)
 
 
 __all__ = ["DB_CONTOURS", "DB_GROUP_MODELS", "DB_NOTES", "GESTURE_DB_VERSION", "MANIFEST_NAME",

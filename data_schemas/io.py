@@ -116,10 +116,36 @@ def read_frame(path: str | os.PathLike, spec: TableSpec) -> pd.DataFrame:
     return read_table(path, spec).to_pandas()
 
 
+def metadata_text(metadata: dict[bytes, bytes] | None, key: str, source: str) -> str:
+    r"""The text of a file's schema-metadata ``key`` ("" when absent).
+
+    Raises
+    ------
+    SchemaError
+        If the value is not UTF-8 text (the message names the file and the key).
+
+    Examples
+    --------
+    >>> metadata_text({b"instrument": b"viola"}, "instrument", "take.parquet")
+    'viola'
+    >>> metadata_text(None, "instrument", "take.parquet")
+    ''
+    >>> metadata_text({b"instrument": b"\xff"}, "instrument", "take.parquet")
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.SchemaError: file take.parquet: metadata 'instrument' is not UTF-8 text
+    """
+    raw = (metadata or {}).get(key.encode(), b"")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise SchemaError(f"metadata '{key}' is not UTF-8 text", source=source) from None
+
+
 def _check_version(schema: pa.Schema, spec: TableSpec, source: str) -> None:
     meta = schema.metadata or {}
-    name = meta.get(b"arco_table", b"").decode()
-    version = meta.get(b"arco_schema_version", b"").decode()
+    name = metadata_text(meta, "arco_table", source)
+    version = metadata_text(meta, "arco_schema_version", source)
     if name and name != spec.name:
         raise SchemaError(f"holds table '{name}', expected '{spec.name}'", source=source)
     if version and version.split(".")[0] != spec.version.split(".")[0]:

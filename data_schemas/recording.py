@@ -15,12 +15,13 @@ import os
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
 
 from data_schemas.errors import SchemaError
 from data_schemas.instruments import INSTRUMENT_NAMES
-from data_schemas.io import read_frame, to_arrow, write_table
+from data_schemas.io import metadata_text, read_frame, to_arrow, write_table
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
 RECORDING_VERSION = "1.0"
@@ -28,8 +29,32 @@ RECORDING_VERSION = "1.0"
 #: Default frame rate of recordings (Hz); any constant rate of 200-240 Hz is accepted.
 RECORDING_FRAME_RATE = 240.0
 
+#: Frame rates (Hz) a recording may have, with 0.5 % slack for rounded time stamps.
+FRAME_RATE_RANGE = (200.0, 240.0)
+_RATE_SLACK = 0.005
+
 #: Instrument of a recording whose file names none.
 DEFAULT_INSTRUMENT = "violin"
+
+def _steady_frame_rate(table: pa.Table, source: str) -> None:
+    """Each take's median frame step must give a rate of 200-240 Hz (see the module doc)."""
+    times = table.column("time").to_numpy(zero_copy_only=False).astype(np.float64)
+    keys = table.column("recording_id").to_numpy(zero_copy_only=False)
+    lo, hi = FRAME_RATE_RANGE
+    for key in np.unique(keys):
+        rows = np.flatnonzero(keys == key)
+        if rows.size < 2:
+            continue
+        step = float(np.median(np.diff(times[rows])))
+        if step <= 0:
+            raise SchemaError(f"take {key!r}: the frame times do not advance (median step "
+                              f"{step} s)", source=source, column="time", row=int(rows[1]))
+        rate = 1.0 / step
+        if not lo * (1 - _RATE_SLACK) <= rate <= hi * (1 + _RATE_SLACK):
+            raise SchemaError(f"take {key!r}: frame rate {rate:.6g} Hz (median step) is "
+                              f"outside {lo:g}-{hi:g} Hz", source=source, column="time",
+                              row=int(rows[0]))
+
 
 RECORDING = TableSpec(
     name="recording",
@@ -57,7 +82,7 @@ RECORDING = TableSpec(
                "Fraction of the string length removed by the finger, 1 - 2**(-semitones/12).",
                minimum=0.0, maximum=0.8),
     ),
-    checks=(non_decreasing("time", within="recording_id"),),
+    checks=(non_decreasing("time", within="recording_id"), _steady_frame_rate),
     extra_metadata={"frame_rate_hz": repr(RECORDING_FRAME_RATE)},
 )
 
@@ -119,8 +144,9 @@ def recording_instrument(metadata: dict[bytes, bytes] | None, source: str = "<re
     source : str
         Name used in error messages.
     """
-    raw = (metadata or {}).get(b"instrument")
-    return DEFAULT_INSTRUMENT if raw is None else check_instrument(raw.decode(), source)
+    if b"instrument" not in (metadata or {}):
+        return DEFAULT_INSTRUMENT
+    return check_instrument(metadata_text(metadata, "instrument", source), source)
 
 
 def read_recording(path: str | os.PathLike) -> pd.DataFrame:
@@ -142,6 +168,6 @@ def frame_rate(recording: pd.DataFrame) -> float:
     return float(1.0 / pd.Series(t).diff().median())
 
 
-__all__ = ["DEFAULT_INSTRUMENT", "RECORDING", "RECORDING_FRAME_RATE", "RECORDING_VERSION",
-           "check_instrument", "frame_rate", "read_recording", "recording_instrument",
-           "validate_recording", "write_recording"]
+__all__ = ["DEFAULT_INSTRUMENT", "FRAME_RATE_RANGE", "RECORDING", "RECORDING_FRAME_RATE",
+           "RECORDING_VERSION", "check_instrument", "frame_rate", "read_recording",
+           "recording_instrument", "validate_recording", "write_recording"]

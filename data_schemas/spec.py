@@ -117,6 +117,7 @@ class TableSpec:
         SchemaError
             Naming ``source``, the column and the first bad row.
         """
+        unique_columns(table.column_names, source)
         extra = [n for n in table.column_names if n not in self.column_names]
         if extra:
             raise SchemaError(
@@ -147,6 +148,26 @@ class TableSpec:
             _check_column(table.column(col.name), col, source)
         for check in self.checks:
             check(table, source)
+
+
+def unique_columns(names: Sequence[str], source: str = "<table>") -> None:
+    """Raise :class:`SchemaError` if a column name appears more than once.
+
+    Examples
+    --------
+    >>> unique_columns(["time", "beta"])
+    >>> unique_columns(["time", "beta", "time"], "take.csv")
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.SchemaError: file take.csv, column 'time': the column name appears 2 times
+    """
+    seen: dict[str, int] = {}
+    for name in names:
+        seen[name] = seen.get(name, 0) + 1
+    for name, count in seen.items():
+        if count > 1:
+            raise SchemaError(f"the column name appears {count} times", source=source,
+                              column=name)
 
 
 def _cast_column(array: pa.ChunkedArray, col: Column, source: str) -> pa.ChunkedArray:

@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from data_schemas.errors import ParameterError, SchemaError
 from data_schemas.gesture_db import (
     DB_GROUP_MODELS,
     DB_NOTES,
@@ -35,6 +36,9 @@ from gesture_db.features import fit_group_model
 from gesture_db.groups import grammar_for
 from gesture_db.importers import Source, load_source, resolve_sources, source_instrument
 from gesture_db.store import model_row, read_source, remove_unlisted, write_source
+
+#: How long to wait for a dask.distributed scheduler to answer.
+CONNECT_TIMEOUT = "10s"
 
 
 @dataclass(frozen=True)
@@ -63,6 +67,11 @@ def process_source(source: Source, params: BuildParams,
         Concatenated over the source's takes.
     stats : dict
         Per-take statistics merged: recording ids, boundary errors, found counts.
+
+    Raises
+    ------
+    SchemaError
+        The source cannot be loaded, or none of its takes holds a note.
     """
     recording, annotation = load_source(source)
     instrument = source_instrument(source)
@@ -75,14 +84,18 @@ def process_source(source: Source, params: BuildParams,
             ann = annotation[annotation["recording_id"] == rid]
         n, c, s = extract_take(take, ann, source_hash=digest, source_path=str(source.path),
                                instrument=instrument, max_candidates=params.max_candidates)
-        notes.append(n)
-        contours.append(c)
+        if len(n):
+            notes.append(n)
+            contours.append(c)
         stats["recording_ids"].append(str(rid))
         stats["n_notes"] += s["n_notes"]
         for key in ("onset_errors", "offset_errors"):
             stats[key] += s.get(key, [])
         stats["found"] += s.get("found", 0)
         stats["n_true"] += s.get("n_true", 0)
+    if not notes:
+        raise SchemaError("no notes found in any take (the bow never starts or changes "
+                          "direction)", source=str(source.mapping or source.path))
     return (pd.concat(notes, ignore_index=True), pd.concat(contours, ignore_index=True),
             stats)
 
@@ -121,31 +134,65 @@ def build_database(sources: list[str | os.PathLike], out: str | os.PathLike, *,
     Raises
     ------
     SchemaError
-        For a bad source or an incompatible existing database (which is left intact).
+        For a bad source, no sources at all, or an incompatible existing database (which is
+        left intact).
+    ParameterError
+        The scheduler cannot be reached (checked before anything is written).
     """
     params = params or BuildParams()
     db = Path(out)
     previous = read_manifest(db) if (db / MANIFEST_NAME).exists() else None
     kept: dict[str, dict] = dict(previous["sources"]) if (previous and append) else {}
     todo = _new_sources(resolve_sources(sources), set(kept))
+    if not todo and not kept:
+        raise SchemaError("no recordings to build from", source=", ".join(map(str, sources)))
+    client, owned = _connect(scheduler)
+    try:
+        return _build(db, previous, kept, todo, params, workers, client, append, progress,
+                      on_source_done)
+    finally:
+        if owned:
+            client.close()
+
+
+def _connect(scheduler: str | object | None) -> tuple[object | None, bool]:
+    """A dask.distributed client for ``scheduler`` (and whether we opened it), or None."""
+    if not isinstance(scheduler, str):
+        return scheduler, False
+    from distributed import Client
+
+    try:
+        return Client(scheduler, timeout=CONNECT_TIMEOUT), True
+    except OSError as exc:
+        raise ParameterError(f"--scheduler {scheduler}: cannot connect "
+                             f"({str(exc).splitlines()[0]})") from None
+
+
+def _build(db: Path, previous: dict | None, kept: dict[str, dict],
+           todo: list[tuple[Source, str]], params: BuildParams, workers: int | None, client,
+           append: bool, progress: bool,
+           on_source_done: Callable[[str], None] | None) -> dict:
+    """Process the new sources, fit the models and commit the next generation."""
     db.mkdir(parents=True, exist_ok=True)
     results, pending = _resume(db, todo)
     resumed = len(results)
     bar = tqdm(total=len(pending), desc="build-db", unit="source", disable=not progress)
-    for dig, (notes, contours, stats) in _run(pending, params, workers, scheduler):
-        write_source(db, dig, notes, contours, stats)
-        results[dig] = read_source(db, dig)[1]
-        bar.update(1)
-        if on_source_done is not None:
-            on_source_done(dig)
-    bar.close()
+    try:
+        for dig, (notes, contours, stats) in _run(pending, params, workers, client):
+            write_source(db, dig, notes, contours, stats)
+            results[dig] = read_source(db, dig)[1]
+            bar.update(1)
+            if on_source_done is not None:
+                on_source_done(dig)
+    finally:
+        bar.close()
     all_sources = {**kept, **{d: _source_entry(s) for d, s in results.items()}}
     generation = (previous["generation"] + 1) if previous else 1
     manifest = _commit_models(db, all_sources, generation, params, progress)
     manifest.update(
         created=_dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         build_params={**asdict(params), "append": append,
-                      "workers": workers, "scheduler": None if scheduler is None else "dask"},
+                      "workers": workers, "scheduler": None if client is None else "dask"},
         resumed_sources=resumed)
     write_manifest(manifest, db)
     remove_unlisted(db, read_manifest(db))
@@ -208,18 +255,13 @@ def _run(pending: list[tuple[Source, str]], params: BuildParams, workers: int | 
 
 
 def _run_distributed(pending, params, scheduler) -> Iterator[tuple[str, tuple]]:
-    from distributed import Client, as_completed
+    from distributed import as_completed
 
-    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
-    try:
-        futures = {client.submit(process_source, src, params, dig, pure=False): dig
-                   for src, dig in pending}
-        for fut in as_completed(futures):
-            yield futures[fut], fut.result()
-            fut.release()
-    finally:
-        if client is not scheduler:
-            client.close()
+    futures = {scheduler.submit(process_source, src, params, dig, pure=False): dig
+               for src, dig in pending}
+    for fut in as_completed(futures):
+        yield futures[fut], fut.result()
+        fut.release()
 
 
 def _commit_models(db: Path, sources: dict[str, dict], generation: int, params: BuildParams,
@@ -229,8 +271,6 @@ def _commit_models(db: Path, sources: dict[str, dict], generation: int, params: 
     for dig in sorted(sources):
         got = read_source(db, dig)
         if got is None:
-            from data_schemas.errors import SchemaError
-
             raise SchemaError("processed source files are missing; rebuild without --append",
                               source=str(db / "sources" / dig))
         parts.append(got[0])

@@ -45,8 +45,9 @@ import pandas as pd
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
-from data_schemas.annotation import read_annotation
+from data_schemas.annotation import check_within_take, read_annotation
 from data_schemas.errors import ArcoError, SchemaError
+from data_schemas.io import metadata_text
 from data_schemas.recording import (
     DEFAULT_INSTRUMENT,
     RECORDING,
@@ -55,6 +56,7 @@ from data_schemas.recording import (
     recording_instrument,
     validate_recording,
 )
+from data_schemas.spec import unique_columns
 
 _DATA_SUFFIXES = (".parquet", ".pq", ".csv")
 
@@ -89,7 +91,7 @@ def resolve_sources(paths: list[str | os.PathLike]) -> list[Source]:
     Raises
     ------
     SchemaError
-        For a missing path or an unsupported file type.
+        For a missing path, a folder without recordings or an unsupported file type.
     """
     out: list[Source] = []
     for raw in paths:
@@ -97,6 +99,9 @@ def resolve_sources(paths: list[str | os.PathLike]) -> list[Source]:
         if p.is_dir():
             files = sorted(f for f in p.iterdir() if f.suffix.lower() in (*_DATA_SUFFIXES, ".toml")
                            and ".annotation." not in f.name)
+            if not files:
+                raise SchemaError("the folder holds no recordings (.parquet, .csv or .toml "
+                                  "mappings)", source=str(p))
             out += [_source_for(f) for f in files]
         elif p.exists():
             out.append(_source_for(p))
@@ -122,19 +127,50 @@ def _source_for(path: Path) -> Source:
 
 
 def _mapped_path(mapping: Path) -> Path:
-    cfg = _read_toml(mapping)
-    rel = cfg.get("source", {}).get("path")
+    """The export file a mapping names (it must be an existing file)."""
+    rel = _read_toml(mapping)["source"].get("path")
     if not rel:
-        raise SchemaError("mapping has no [source] path", source=str(mapping), column="path")
-    return (mapping.parent / rel).resolve()
+        raise SchemaError("mapping has no [source] path", source=str(mapping))
+    if not isinstance(rel, str):
+        raise SchemaError(f"[source] path must be a file name in quotes, not {rel!r}",
+                          source=str(mapping))
+    path = (mapping.parent / rel).resolve()
+    if path.is_dir():
+        raise SchemaError(f"[source] path {rel!r} is a folder, not a CSV or Parquet file",
+                          source=str(mapping))
+    if not path.is_file():
+        raise SchemaError(f"[source] path {rel!r}: file not found ({path})",
+                          source=str(mapping))
+    return path
 
 
 def _read_toml(path: Path) -> dict:
+    """Read a mapping: ``[source]``, ``[columns]``, ``[scale]``, ``[defaults]`` tables."""
     try:
         with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except (tomllib.TOMLDecodeError, OSError) as exc:
-        raise SchemaError(f"cannot read mapping: {exc}", source=str(path)) from None
+            cfg = tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, OSError, UnicodeDecodeError) as exc:
+        text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise SchemaError(f"cannot read mapping: {text}", source=str(path)) from None
+    for section in ("source", "columns", "scale", "defaults"):
+        cfg.setdefault(section, {})
+        if not isinstance(cfg[section], dict):
+            raise SchemaError(f"'{section}' must be a table ([{section}]), not "
+                              f"{cfg[section]!r}", source=str(path))
+    for key in ("annotation", "recording_id", "instrument"):
+        value = cfg["source"].get(key)
+        if value is not None and not isinstance(value, str):
+            raise SchemaError(f"[source] {key} must be text in quotes, not {value!r}",
+                              source=str(path))
+    for section, kind, what in (("columns", str, "a column name in quotes"),
+                                ("scale", (int, float), "a number"),
+                                ("defaults", (int, float), "a number")):
+        for key, value in cfg[section].items():
+            if not isinstance(value, kind) or isinstance(value, bool) or (
+                    kind is not str and not np.isfinite(value)):
+                raise SchemaError(f"[{section}] {key} must be {what}, not {value!r}",
+                                  source=str(path), column=key)
+    return cfg
 
 
 def load_source(source: Source) -> tuple[pd.DataFrame, pd.DataFrame | None]:
@@ -143,7 +179,15 @@ def load_source(source: Source) -> tuple[pd.DataFrame, pd.DataFrame | None]:
         return load_mapped(source.mapping)
     recording = load_recording_file(source.path)
     annotation = read_annotation(source.annotation) if source.annotation else None
+    _fits(recording, annotation, source.annotation)
     return recording, annotation
+
+
+def _fits(recording: pd.DataFrame, annotation: pd.DataFrame | None, path: Path | None) -> None:
+    """An annotation's notes end within their takes."""
+    if annotation is not None:
+        ends = recording.groupby("recording_id", sort=False)["time"].max().to_dict()
+        check_within_take(annotation, {str(k): float(v) for k, v in ends.items()}, str(path))
 
 
 def source_instrument(source: Source) -> str:
@@ -155,8 +199,7 @@ def source_instrument(source: Source) -> str:
         The mapping or the file metadata names an unknown instrument.
     """
     if source.mapping is not None:
-        name = _read_toml(source.mapping).get("source", {}).get("instrument",
-                                                                 DEFAULT_INSTRUMENT)
+        name = _read_toml(source.mapping)["source"].get("instrument", DEFAULT_INSTRUMENT)
         return check_instrument(name, str(source.mapping))
     if source.path.suffix.lower() in (".parquet", ".pq"):
         try:
@@ -172,7 +215,7 @@ def load_recording_file(path: str | os.PathLike) -> pd.DataFrame:
     path = Path(path)
     table = _read_any(path)
     meta = table.schema.metadata or {}
-    kind = meta.get(b"arco_table", b"").decode()
+    kind = metadata_text(meta, "arco_table", str(path))
     if kind == "actions" or (not kind and "pluck" in table.column_names):
         return recording_from_actions(table.to_pandas(), recording_id=path.stem)
     if kind and kind != "recording":
@@ -189,10 +232,13 @@ def _read_any(path: Path):
         raise SchemaError("file not found", source=str(path))
     try:
         if path.suffix.lower() == ".csv":
-            return pacsv.read_csv(path)
-        return pq.read_table(path)
+            table = pacsv.read_csv(path)
+        else:
+            table = pq.read_table(path)
     except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
         raise SchemaError(f"cannot read: {str(exc).splitlines()[0]}", source=str(path)) from None
+    unique_columns(table.column_names, str(path))
+    return table
 
 
 def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame | None]:
@@ -205,12 +251,9 @@ def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame 
     """
     mapping = Path(mapping)
     cfg = _read_toml(mapping)
-    src = cfg.get("source", {})
+    src, columns, scale, defaults = (cfg[k] for k in ("source", "columns", "scale", "defaults"))
     data_path = _mapped_path(mapping)
     raw = _read_any(data_path).to_pandas()
-    columns = cfg.get("columns", {})
-    scale = cfg.get("scale", {})
-    defaults = cfg.get("defaults", {})
     frame = pd.DataFrame(index=raw.index)
     for name in RECORDING.column_names:
         if name == "recording_id":
@@ -220,9 +263,9 @@ def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame 
             if col not in raw:
                 raise SchemaError(f"mapped column '{col}' not in the export (has "
                                   f"{list(raw.columns)})", source=str(data_path), column=name)
-            frame[name] = raw[col].astype(float) * float(scale.get(name, 1.0))
+            frame[name] = _numbers(raw[col], data_path, col) * float(scale.get(name, 1.0))
         elif name in raw:
-            frame[name] = raw[name].astype(float) * float(scale.get(name, 1.0))
+            frame[name] = _numbers(raw[name], data_path, name) * float(scale.get(name, 1.0))
         elif name in defaults:
             frame[name] = defaults[name]
         else:
@@ -232,7 +275,19 @@ def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame 
     recording = validate_recording(frame, source=str(data_path))
     ann = src.get("annotation")
     annotation = read_annotation(mapping.parent / ann) if ann else None
+    _fits(recording, annotation, mapping.parent / ann if ann else None)
     return recording, annotation
+
+
+def _numbers(column: pd.Series, path: Path, name: str) -> pd.Series:
+    """A column of an export as floats, or a SchemaError naming the first row that is not."""
+    values = pd.to_numeric(column, errors="coerce")
+    bad = (values.isna() & column.notna()).to_numpy()
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise SchemaError(f"value {column.iloc[row]!r} is not a number", source=str(path),
+                          column=name, row=row)
+    return values.astype(float)
 
 
 def recording_from_actions(actions: pd.DataFrame, *, recording_id: str = "actions",

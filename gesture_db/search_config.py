@@ -7,6 +7,7 @@ Weights of the target and continuity costs, the number of Viterbi candidates per
 
 from __future__ import annotations
 
+import math
 import os
 import tomllib
 from functools import lru_cache
@@ -18,6 +19,8 @@ from data_schemas.errors import ParameterError
 
 #: Bounds on the number of Viterbi candidates per note.
 MAX_N_BEST = 1024
+#: Largest weight, scale or distance accepted (a sane bound, far above any useful value).
+MAX_VALUE = 1e6
 
 
 @lru_cache(maxsize=1)
@@ -32,9 +35,20 @@ def load_search_config(path: str | os.PathLike | None = None,
     Raises
     ------
     ParameterError
-        Missing or unreadable file, unknown key, negative weight (naming file and key).
+        Missing or unreadable file, unknown key, a value that is not a finite number in
+        0..:data:`MAX_VALUE` (naming file and key).
+
+    Examples
+    --------
+    >>> load_search_config(overrides={"weights": {"gesture": 2.0}})["weights"]["gesture"]
+    2.0
+    >>> load_search_config(overrides={"weights": {"gesture": float("nan")}})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: search config <overrides>: weights.gesture=nan must be ...
     """
     config = tomllib.loads(_default_text())
+    sources = []
     if path is not None:
         p = Path(path)
         if not p.is_file():
@@ -44,9 +58,11 @@ def load_search_config(path: str | os.PathLike | None = None,
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise ParameterError(f"search config {p}: not TOML ({exc})") from None
         _merge(config, user, str(p), "")
+        sources.append(str(p))
     if overrides:
         _merge(config, overrides, "<overrides>", "")
-    _validate(config)
+        sources.append("<overrides>")
+    _validate(config, f"search config {' + '.join(sources)}" if sources else "search config")
     return config
 
 
@@ -62,19 +78,32 @@ def _merge(base: dict, over: dict, source: str, prefix: str) -> None:
             base[key] = value
 
 
-def _validate(config: dict) -> None:
+def _validate(config: dict, where: str) -> None:
     n = config["n_best"]
-    if not isinstance(n, int) or not 1 <= n <= MAX_N_BEST:
-        raise ParameterError(f"search config: n_best={n!r} must be an integer in 1..{MAX_N_BEST}")
-    for section in ("weights", "continuity_scale"):
-        for key, value in config[section].items():
-            if not isinstance(value, int | float) or value < 0:
-                raise ParameterError(f"search config: {section}.{key}={value!r} must be >= 0")
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_N_BEST:
+        raise ParameterError(f"{where}: n_best={n!r} must be an integer in 1..{MAX_N_BEST}")
+    for name, value in _numbers(config, ""):
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(
+                value):
+            raise ParameterError(f"{where}: {name}={value!r} must be a finite number")
+        if value < 0:
+            raise ParameterError(f"{where}: {name}={value!r} must be >= 0")
+        if value > MAX_VALUE:
+            raise ParameterError(f"{where}: {name}={value!r} must be <= {MAX_VALUE:g}")
     for key, value in config["continuity_scale"].items():
         if value <= 0:
-            raise ParameterError(f"search config: continuity_scale.{key}={value!r} must be > 0")
+            raise ParameterError(f"{where}: continuity_scale.{key}={value!r} must be > 0")
     if config["costs"]["dynamic_span"] <= 0:
-        raise ParameterError("search config: costs.dynamic_span must be > 0")
+        raise ParameterError(f"{where}: costs.dynamic_span must be > 0")
 
 
-__all__ = ["MAX_N_BEST", "load_search_config"]
+def _numbers(table: dict, prefix: str):
+    """``(dotted name, value)`` of every setting below the top level (all are numbers)."""
+    for key, value in table.items():
+        if isinstance(value, dict):
+            yield from _numbers(value, f"{prefix}{key}.")
+        elif prefix:
+            yield f"{prefix}{key}", value
+
+
+__all__ = ["MAX_N_BEST", "MAX_VALUE", "load_search_config"]

@@ -171,7 +171,7 @@ def detect_notes(recording: pd.DataFrame, *, events: Events | None = None,
     stops = events.time[events.kind == STOP]
     f = recording["bow_force"].to_numpy()
     fs = 1.0 / (t[1] - t[0]) if t.size > 1 else 1.0
-    offsets = np.r_[onsets[1:], t[-1] if t.size else 0.0]
+    offsets = np.r_[onsets[1:], t[-1] if t.size else 0.0] if onsets.size else np.empty(0)
     for k in range(onsets.size):
         s = stops[(stops > onsets[k]) & (stops < offsets[k])]
         if s.size:

@@ -85,51 +85,96 @@ def _merge(base: dict[str, Any], over: dict[str, Any], source: str, prefix: str)
             base[key] = value
 
 
-def _positive(config: dict[str, Any], section: str, key: str, source: str,
-              upper: float | None = None) -> None:
+#: Largest accepted value of each positive setting (sane bounds, far above useful values):
+#: per section, per key or ``"*"`` for every key of the section.
+UPPER_LIMITS: dict[str, dict[str, float]] = {
+    "frames": {"interval": 0.1},
+    "bow": {"max_acceleration": 100.0, "min_speed_scale": 1.0, "max_speed_scale": 10.0,
+            "retake_gap": 10.0, "region_span": 1.0},
+    "articulations": {"*": 10.0},
+    "techniques": {"*": 10.0},
+    "instruments": {"force_scale": 10.0, "bow_length": 1.5},
+    "dynamics": {"beta": 0.5, "velocity": 5.0, "force": 20.0},
+    "skill": {"pitch_sigma": 12.0, "onset_sigma": 1.0},
+}
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and \
+        bool(np.isfinite(value))
+
+
+def _upper(section: str, key: str) -> float:
+    table = UPPER_LIMITS[section]
+    return table.get(key, table.get("*", np.inf))
+
+
+def _positive(config: dict[str, Any], section: str, key: str, source: str) -> None:
     value = config[section][key]
-    if not isinstance(value, int | float) or not np.isfinite(value) or value <= 0 or \
-            (upper is not None and value > upper):
-        limit = f" and <= {upper}" if upper is not None else ""
-        raise ParameterError(f"{source}: {section}.{key}={value!r} must be > 0{limit}")
+    upper = _upper(section, key)
+    if not _is_number(value) or value <= 0 or value > upper:
+        raise ParameterError(f"{source}: {section}.{key}={value!r} must be > 0 and <= {upper}")
+
+
+def _numbers(values: object, name: str, count: int, lower: str, upper: float,
+             source: str) -> np.ndarray:
+    """A list of ``count`` finite numbers above ``lower`` (``"> 0"`` or ``">= 0"``)."""
+    ok = isinstance(values, list) and len(values) == count and all(map(_is_number, values))
+    array = np.asarray(values if ok else [], dtype=np.float64)
+    if ok:
+        ok = bool(np.all(array > 0 if lower == "> 0" else array >= 0) and np.all(array <= upper))
+    if not ok:
+        shown = repr(values) if len(repr(values)) <= 80 else f"{repr(values)[:77]}..."
+        raise ParameterError(f"{source}: {name} must hold {count} numbers {lower} and <= "
+                             f"{upper}, got {shown}")
+    return array
 
 
 def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
-    """Check the rules configuration; raise :class:`ParameterError` naming the key."""
+    """Check the rules configuration; raise :class:`ParameterError` naming the key.
+
+    Every setting must be a finite number within its range; positive settings are also
+    bounded by :data:`UPPER_LIMITS`.
+
+    Examples
+    --------
+    >>> validate_config(default_config())
+    >>> bad = _copy(default_config())
+    >>> bad["frames"]["interval"] = 1e300
+    >>> validate_config(bad, "my.toml")
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: my.toml: frames.interval=1e+300 must be > 0 and <= 0.1
+    """
     for key in ("beta", "velocity", "force"):
-        values = np.asarray(config["dynamics"][key], dtype=np.float64)
-        if values.shape != (_N_LEVELS,) or not np.all(np.isfinite(values)) or \
-                np.any(values <= 0):
-            raise ParameterError(
-                f"{source}: dynamics.{key} must hold {_N_LEVELS} positive numbers "
-                f"(pppp..ffff), got {config['dynamics'][key]!r}")
+        _numbers(config["dynamics"][key], f"dynamics.{key}", _N_LEVELS, "> 0",
+                 _upper("dynamics", key), source)
     if np.any(np.asarray(config["dynamics"]["beta"]) >= 0.5):
         raise ParameterError(f"{source}: dynamics.beta values must be < 0.5")
     for name, inst in config["instruments"].items():
         for key in ("force_scale", "bow_length"):
-            value = inst.get(key)
-            if not isinstance(value, int | float) or value <= 0:
-                raise ParameterError(f"{source}: instruments.{name}.{key}={value!r} must be > 0")
-    _positive(config, "frames", "interval", source, upper=0.1)
+            value, upper = inst.get(key), _upper("instruments", key)
+            if not _is_number(value) or not 0 < value <= upper:
+                raise ParameterError(f"{source}: instruments.{name}.{key}={value!r} must be "
+                                     f"> 0 and <= {upper}")
+    _positive(config, "frames", "interval", source)
     for key in ("max_acceleration", "min_speed_scale", "max_speed_scale", "retake_gap",
                 "region_span"):
         _positive(config, "bow", key, source)
-    if not 0 <= config["bow"]["margin"] < 0.5:
-        raise ParameterError(f"{source}: bow.margin={config['bow']['margin']!r} must be in "
-                             "[0, 0.5)")
+    margin = config["bow"]["margin"]
+    if not _is_number(margin) or not 0 <= margin < 0.5:
+        raise ParameterError(f"{source}: bow.margin={margin!r} must be in [0, 0.5)")
     for key in config["articulations"]:
         _positive(config, "articulations", key, source)
     for key in config["techniques"]:
         _positive(config, "techniques", key, source)
     for key, value in config["bow_regions"].items():
-        if not isinstance(value, int | float) or not 0 <= value <= 1:
+        if not _is_number(value) or not 0 <= value <= 1:
             raise ParameterError(f"{source}: bow_regions.{key}={value!r} must be in [0, 1]")
     _validate_expression(config, source)
     for key in ("pitch_sigma", "onset_sigma"):
-        values = config["skill"][key]
-        if len(values) != 4 or any(v < 0 for v in values):
-            raise ParameterError(f"{source}: skill.{key} must hold 4 numbers >= 0 "
-                                 f"(levels 0..3), got {values!r}")
+        _numbers(config["skill"][key], f"skill.{key} (levels 0..3)", 4, ">= 0",
+                 _upper("skill", key), source)
 
 
 _VIBRATO_POSITIVE = ("rate", "onset_delay", "fade_in", "min_duration")

@@ -65,46 +65,15 @@ def read_midi(path: str | os.PathLike) -> pd.DataFrame:
         raise ScoreError(f"{path}: cannot read MIDI ({text[:200]})") from None
     if midi.type == 2:
         raise ScoreError(f"{path}: MIDI type 2 (independent sequences) is not supported")
-    tpb = float(midi.ticks_per_beat)
+    if not midi.ticks_per_beat > 0:
+        raise ScoreError(f"{path}: {midi.ticks_per_beat} ticks per beat (must be > 0)")
     tempi: list[tuple[float, float]] = []
     meters: list[tuple[float, float]] = []
     parts: dict[tuple[int, int], RawPart] = {}
     velocities: dict[tuple[int, int], list[float]] = {}
     for t, track in enumerate(midi.tracks):
-        name = ""
-        programs: dict[int, int] = {}
-        open_notes: dict[tuple[int, int], list[tuple[float, int]]] = {}
-        tick = 0
-        for msg in track:
-            tick += msg.time
-            beat = tick / tpb
-            if msg.type == "set_tempo":
-                tempi.append((beat, 60e6 / msg.tempo))
-            elif msg.type == "time_signature":
-                meters.append((beat, 4.0 * msg.numerator / msg.denominator))
-            elif msg.type == "track_name":
-                name = msg.name.strip()
-            elif msg.type == "program_change":
-                programs[msg.channel] = msg.program
-            elif msg.type == "note_on" and msg.velocity > 0:
-                open_notes.setdefault((msg.channel, msg.note), []).append((beat, msg.velocity))
-            elif msg.type in ("note_off", "note_on"):
-                started = open_notes.get((msg.channel, msg.note))
-                if not started:
-                    continue
-                onset, velocity = started.pop(0)
-                key = (t, msg.channel)
-                if key not in parts:
-                    program = programs.get(msg.channel)
-                    parts[key] = RawPart(
-                        index=0, part_id=f"track{t}-ch{msg.channel}",
-                        name=name or f"Track {t} channel {msg.channel + 1}",
-                        names=[name, _PROGRAMS.get(program, "")])
-                    velocities[key] = []
-                parts[key].notes.append({"onset_beats": onset,
-                                         "duration_beats": max(beat - onset, 0.0),
-                                         "midi_pitch": msg.note})
-                velocities[key].append(velocity)
+        _read_track(track, t, float(midi.ticks_per_beat), path, tempi, meters, parts,
+                    velocities)
     if not parts:
         raise ScoreError(f"{path}: the MIDI file holds no notes")
     ordered = [parts[k] for k in sorted(parts)]
@@ -112,6 +81,52 @@ def read_midi(path: str | os.PathLike) -> pd.DataFrame:
         part.index = index
         _finish_part(part, np.asarray(velocities[key]), meters)
     return assemble(ordered, TempoMap(tempi), str(path))
+
+
+def _read_track(track, t: int, tpb: float, path: Path, tempi: list[tuple[float, float]],
+                meters: list[tuple[float, float]], parts: dict[tuple[int, int], RawPart],
+                velocities: dict[tuple[int, int], list[float]]) -> None:
+    """Add track ``t``'s tempi, meters and notes (one part per channel) to the collections."""
+    name = ""
+    programs: dict[int, int] = {}
+    open_notes: dict[tuple[int, int], list[tuple[float, int]]] = {}
+    tick = 0
+    for msg in track:
+        tick += msg.time
+        beat = tick / tpb
+        if msg.type == "set_tempo":
+            if msg.tempo <= 0:
+                raise ScoreError(f"{path}: track {t} tick {tick}: tempo of {msg.tempo} "
+                                 "microseconds per beat (must be > 0)")
+            tempi.append((beat, 60e6 / msg.tempo))
+        elif msg.type == "time_signature":
+            if msg.numerator <= 0:
+                raise ScoreError(f"{path}: track {t} tick {tick}: time signature "
+                                 f"{msg.numerator}/{msg.denominator} (needs beats > 0)")
+            meters.append((beat, 4.0 * msg.numerator / msg.denominator))
+        elif msg.type == "track_name":
+            name = msg.name.strip()
+        elif msg.type == "program_change":
+            programs[msg.channel] = msg.program
+        elif msg.type == "note_on" and msg.velocity > 0:
+            open_notes.setdefault((msg.channel, msg.note), []).append((beat, msg.velocity))
+        elif msg.type in ("note_off", "note_on"):
+            started = open_notes.get((msg.channel, msg.note))
+            if not started:
+                continue
+            onset, velocity = started.pop(0)
+            key = (t, msg.channel)
+            if key not in parts:
+                program = programs.get(msg.channel)
+                parts[key] = RawPart(
+                    index=0, part_id=f"track{t}-ch{msg.channel}",
+                    name=name or f"Track {t} channel {msg.channel + 1}",
+                    names=[name, _PROGRAMS.get(program, "")])
+                velocities[key] = []
+            parts[key].notes.append({"onset_beats": onset,
+                                     "duration_beats": max(beat - onset, 0.0),
+                                     "midi_pitch": msg.note})
+            velocities[key].append(velocity)
 
 
 def _measure_numbers(beats: np.ndarray, meters: list[tuple[float, float]]) -> np.ndarray:

@@ -100,7 +100,7 @@ def notes_from_music21(score, *, source: str = "<music21>") -> pd.DataFrame:
     raws = []
     tempo_points: list[tuple[float, float, bool]] = []
     for index, part in enumerate(parts):
-        raw, tempi = _read_part(part, index)
+        raw, tempi = _read_part(part, index, source)
         raws.append(raw)
         tempo_points.extend(tempi)
     return assemble(raws, _tempo_map(tempo_points), source)
@@ -131,7 +131,8 @@ def _voice_number(voice, fallback: int) -> int:
         return fallback
 
 
-def _read_part(part, index: int) -> tuple[RawPart, list[tuple[float, float, bool]]]:
+def _read_part(part, index: int,
+               source: str) -> tuple[RawPart, list[tuple[float, float, bool]]]:
     from music21 import stream
 
     name = part.partName or str(part.id or f"P{index + 1}")
@@ -166,7 +167,7 @@ def _read_part(part, index: int) -> tuple[RawPart, list[tuple[float, float, bool
                         if _SFORZANDI[value] is not None:
                             raw.dynamics.append((beat, _SFORZANDI[value]))
                 elif "MetronomeMark" in classes:
-                    bpm = el.getQuarterBPM()
+                    bpm = _metronome_bpm(el, f"{source}: part {name!r} measure {number}")
                     if bpm:
                         tempi.append((beat, float(bpm), True))
                         main_tempo = float(bpm)
@@ -188,6 +189,14 @@ def _read_part(part, index: int) -> tuple[RawPart, list[tuple[float, float, bool
             if round(note["onset_beats"], 4) in beats:
                 note["accent"] = True
     return raw, tempi
+
+
+def _metronome_bpm(mark, where: str) -> float | None:
+    """Quarter notes per minute of a metronome mark; a written number must be positive."""
+    number = mark.number
+    if number is not None and not 0 < float(number) < float("inf"):
+        raise ScoreError(f"{where}: metronome mark of {number} per minute (must be > 0)")
+    return mark.getQuarterBPM()
 
 
 def _word_tempo(text: str) -> float | None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from pipelines.cli.outputs import output_dir
 from pipelines.cli.types import positive_int
 
 
@@ -30,6 +31,7 @@ def run(args: argparse.Namespace) -> int:
     """Build and print a one-line summary."""
     from gesture_db.build import build_database
 
+    output_dir(args.output)
     m = build_database(args.recordings, args.output, workers=args.workers,
                        scheduler=args.scheduler, append=args.append)
     seg = m.get("segmentation", {})

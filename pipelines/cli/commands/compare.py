@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from pipelines.cli.outputs import output_dir
 from pipelines.cli.types import non_negative_int
 
 DEFAULT_METHODS = "rules,feedback,sampling,sampling-open"
@@ -41,6 +42,7 @@ def run(args: argparse.Namespace) -> int:
     """Compare and print where the report is."""
     from pipelines.reports.compare import compare
 
+    output_dir(args.output)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     compare(args.scores, args.output, methods=methods, db=args.db, models=args.models,

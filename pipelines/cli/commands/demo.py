@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from pipelines.cli.help import RawDescriptionFormatter
+from pipelines.cli.outputs import output_dir
 from pipelines.cli.types import non_negative_int, positive_int
 from pipelines.score.bundled import bundled_score
 from synth.strings import INSTRUMENT_NAMES
@@ -52,7 +53,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Play the scales and the quartet excerpt; write audio, plots and the report."""
-    out: Path = args.output
+    out: Path = output_dir(args.output)
     out.mkdir(parents=True, exist_ok=True)
     report = ["# Arco demo", ""]
     report += scales(out, args.seed)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
+from pipelines.cli.outputs import output_file
+
 if TYPE_CHECKING:  # pragma: no cover - typing only
     import pandas as pd
 
@@ -63,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
     from data_schemas.notes import write_notes
     from pipelines.score import read_score
 
+    if args.output:
+        output_file(args.output)
     notes = read_score(args.score)
     if args.output:
         path = write_notes(notes, args.output)

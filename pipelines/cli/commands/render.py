@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
+from pipelines.cli.outputs import output_file
 from pipelines.cli.types import non_negative_int
 from pipelines.methods.registry import METHODS, check_methods, get_method
 from synth.engines import DEFAULT_ENGINE, engine_names
@@ -91,6 +92,9 @@ def _check(args: argparse.Namespace, method: str) -> None:
                              "or --plot")
     if args.output and Path(args.output).suffix.lower() not in (".wav", ".flac"):
         raise ParameterError(f"-o {args.output}: use a .wav (or .flac) file")
+    for option in ("output", "actions", "diagnostics", "plot"):
+        if getattr(args, option):
+            output_file(getattr(args, option), "-o" if option == "output" else f"--{option}")
     check_methods([method], db=args.db, models=args.models, option="--method")
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from pipelines.cli.outputs import output_dir
 from pipelines.cli.types import non_negative_int, positive_int
 
 
@@ -32,6 +33,7 @@ def run(args: argparse.Namespace) -> int:
     from gesture_db.simulate import simulate_recordings
     from gesture_db.simulate_config import load_performers
 
+    output_dir(args.output)
     bases = load_performers(args.performers_config) if args.performers_config else None
     paths = simulate_recordings(args.notes, args.performers, args.output, seed=args.seed,
                                 notes_per_take=args.notes_per_take,

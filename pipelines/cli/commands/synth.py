@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
+from pipelines.cli.outputs import output_file
 from pipelines.cli.types import non_negative_int
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
@@ -42,6 +43,7 @@ def run(args: argparse.Namespace) -> int:
     from pipelines.audio_io import write_audio
     from synth.render import render_actions
 
+    output_file(args.output)
     actions = read_actions(args.actions)
     if actions.empty:
         raise ParameterError(f"{args.actions}: the actions table has no rows")

@@ -7,6 +7,7 @@ import sys
 from dataclasses import replace
 
 from data_schemas.errors import ParameterError
+from pipelines.cli.outputs import output_dir
 from pipelines.cli.types import non_negative_int, positive_int
 from synth.strings import INSTRUMENT_NAMES
 
@@ -61,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
     from synth.listening.settings_file import load_listening_settings
     from synth.listening.training import QUICK, TrainingSettings
 
+    output_dir(args.output)
     if args.workers is not None and args.workers < 1:
         raise ParameterError(f"--workers {args.workers} must be >= 1")
     config = load_config(args.config)
