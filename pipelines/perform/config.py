@@ -96,6 +96,7 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
     "instruments": {"force_scale": 10.0, "bow_length": 1.5},
     "dynamics": {"beta": 0.5, "velocity": 5.0, "force": 20.0},
     "skill": {"pitch_sigma": 12.0, "onset_sigma": 1.0},
+    "vibrato": {"*": 20.0, "extent": 100.0, "onset_share": 1.0},
 }
 
 
@@ -183,11 +184,6 @@ _VIBRATO_NONNEGATIVE = ("extent", "rate_sigma", "extent_sigma", "performer_rate_
                         "length_extent", "phrase_end_extent", "onset_share")
 
 
-def _number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and \
-        bool(np.isfinite(value))
-
-
 def _validate_expression(config: dict[str, Any], source: str) -> None:
     """``[vibrato]`` and ``[intonation]``: numbers in range, switches boolean."""
     vib = config["vibrato"]
@@ -195,24 +191,23 @@ def _validate_expression(config: dict[str, Any], source: str) -> None:
         if not isinstance(vib[key], bool):
             raise ParameterError(f"{source}: vibrato.{key}={vib[key]!r} must be true or false")
     for key in _VIBRATO_POSITIVE:
-        _positive(config, "vibrato", key, source, upper=20.0)
+        _positive(config, "vibrato", key, source)
     for key in _VIBRATO_NONNEGATIVE:
-        if not _number(vib[key]) or vib[key] < 0:
-            raise ParameterError(f"{source}: vibrato.{key}={vib[key]!r} must be a number >= 0")
+        upper = _upper("vibrato", key)
+        if not _is_number(vib[key]) or not 0 <= vib[key] <= upper:
+            raise ParameterError(f"{source}: vibrato.{key}={vib[key]!r} must be a number "
+                                 f">= 0 and <= {upper}")
     if not 3.0 <= vib["rate"] <= 9.0:
         raise ParameterError(f"{source}: vibrato.rate={vib['rate']!r} must be in [3, 9] Hz")
-    if vib["extent"] > 100.0:
-        raise ParameterError(f"{source}: vibrato.extent={vib['extent']!r} must be <= 100 "
-                             "cents")
     if vib["enabled"] and config["frames"]["interval"] > 1.0 / (8.0 * vib["rate"]):
         raise ParameterError(f"{source}: frames.interval={config['frames']['interval']!r} s "
                              f"is too coarse for a {vib['rate']} Hz vibrato (at most "
                              f"{1.0 / (8.0 * vib['rate']):.4f} s: 8 frames a cycle)")
     into = config["intonation"]
-    if not _number(into["sigma"]) or not 0 <= into["sigma"] <= 100:
+    if not _is_number(into["sigma"]) or not 0 <= into["sigma"] <= 100:
         raise ParameterError(f"{source}: intonation.sigma={into['sigma']!r} must be in "
                              "[0, 100] cents")
-    if not _number(into["semitone_step"]) or abs(into["semitone_step"]) > 50:
+    if not _is_number(into["semitone_step"]) or abs(into["semitone_step"]) > 50:
         raise ParameterError(f"{source}: intonation.semitone_step="
                              f"{into['semitone_step']!r} must be in [-50, 50] cents")
 
