@@ -57,3 +57,16 @@ def test_evaluate_cli_json(rendered, tmp_path, capsys):
     assert set(out["piece"]["class_histogram"]) == {"1", "2", "3", "4", "5"}
     assert main(["evaluate", str(tmp_path / "missing.wav"), "--actions", str(act)]) == 2
     assert np.isfinite(out["piece"]["helmholtz_share"])
+
+
+@pytest.mark.parametrize(("samples", "expected"), [
+    (np.zeros(44100, np.float32), "silent"),
+    (np.r_[np.zeros(10), np.nan, np.zeros(10)].astype(np.float32), "not finite from sample 10")])
+def test_evaluate_refuses_silent_or_non_finite_audio_naming_the_file(tmp_path, capsys,
+                                                                     samples, expected):
+    wav = tmp_path / "bad.wav"
+    soundfile.write(wav, samples, 44100, subtype="FLOAT")
+    code = main(["evaluate", str(wav), "--actions", str(tmp_path / "missing.parquet")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert str(wav) in err[0] and expected in err[0]

@@ -81,6 +81,36 @@ def _per_hop(column: np.ndarray, times: np.ndarray, n: int, sample_rate: int,
     return out
 
 
+#: Audio whose peak is below this (full scale = 1) is silent: nothing to evaluate.
+SILENT_PEAK = 1e-6
+
+
+def check_playable(audio: np.ndarray, sample_rate: int) -> None:
+    """Refuse audio that holds NaN or inf, or is silent (peak below :data:`SILENT_PEAK`).
+
+    Raises
+    ------
+    ParameterError
+        Naming the first bad sample and its time.
+
+    Examples
+    --------
+    >>> check_playable(np.array([0.0, 0.2, -0.1]), 44100)
+    >>> check_playable(np.zeros(4), 44100)
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: the audio is silent (peak 0 of full scale)
+    """
+    bad = ~np.isfinite(audio)
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise ParameterError(f"the audio is not finite from sample {first} "
+                             f"({first / sample_rate:.3f} s)")
+    peak = float(np.max(np.abs(audio))) if audio.size else 0.0
+    if peak < SILENT_PEAK:
+        raise ParameterError(f"the audio is silent (peak {peak:.3g} of full scale)")
+
+
 def evaluate(audio: np.ndarray, actions: pd.DataFrame, *, sample_rate: int = 44100,
              diagnostics: pd.DataFrame | None = None, instrument: str = "violin",
              score: pd.DataFrame | None = None,
@@ -112,9 +142,10 @@ def evaluate(audio: np.ndarray, actions: pd.DataFrame, *, sample_rate: int = 441
     from synth.strings import load_instrument
 
     consts = load_instrument(instrument)
-    audio = np.nan_to_num(np.asarray(audio, np.float64))
+    audio = np.asarray(audio, np.float64)
     if audio.ndim != 1:
         raise ParameterError(f"audio must be mono, got shape {audio.shape}")
+    check_playable(audio, sample_rate)
     n_hops = int(np.ceil(audio.size / HOP))
     audio = np.concatenate([audio, np.zeros(n_hops * HOP + 4 * HOP - audio.size)])
     notes = find_notes(actions, sample_rate=sample_rate)

@@ -335,8 +335,42 @@ def load_pair(directory: str | os.PathLike, instrument: str, string: int,
                          f"from this Arco's {list(FEATURE_NAMES)}; {retrain}")
     if not path.exists():
         raise ModelError(f"{path}: model file not found ({retrain})")
+    _check_control(meta, json_path, retrain)
     arrays = _read_arrays(path)
     return PairModel(instrument, int(string), dynamic, arrays, meta)
+
+
+#: Accepted range of a trained force factor K (F <- F K^(3 - class)).
+K_RANGE = (1.0, 10.0)
+#: Largest accepted initial bow force, N.
+MAX_INITIAL_FORCE = 50.0
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and \
+        bool(np.isfinite(value))
+
+
+def _check_control(meta: dict, json_path: Path, retrain: str) -> None:
+    """Check a trained pair's control settings.
+
+    K is a number in :data:`K_RANGE` and there is one initial force (N) per finger of
+    :data:`FINGERS`; a complete model must have both.
+    """
+    complete = bool(meta.get("complete"))
+    if "K" in meta or complete:
+        k = meta.get("K")
+        if not _finite(k) or not K_RANGE[0] <= k <= K_RANGE[1]:
+            raise ModelError(f"{json_path}: key 'K' = {k!r} must be a number from "
+                             f"{K_RANGE[0]:g} to {K_RANGE[1]:g}; {retrain}")
+    if "initial_forces" in meta or complete:
+        forces = meta.get("initial_forces")
+        ok = isinstance(forces, list) and len(forces) == len(FINGERS) and all(
+            _finite(f) and 0 < f <= MAX_INITIAL_FORCE for f in forces)
+        if not ok:
+            raise ModelError(f"{json_path}: key 'initial_forces' = {forces!r} must list "
+                             f"{len(FINGERS)} forces in (0, {MAX_INITIAL_FORCE:g}] N (one per "
+                             f"finger at {list(FINGERS)} semitones); {retrain}")
 
 
 def _read_arrays(path: Path) -> dict[str, np.ndarray]:

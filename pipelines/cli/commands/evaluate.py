@@ -57,6 +57,12 @@ def run(args: argparse.Namespace) -> int:
                              f"({str(exc).splitlines()[0]})") from None
     if audio.ndim > 1:
         audio = audio.mean(axis=1)
+    from pipelines.listening.evaluate import check_playable
+
+    try:
+        check_playable(audio, int(sr))
+    except ParameterError as exc:
+        raise ParameterError(f"{args.audio}: {exc}") from None
     actions = read_actions(args.actions)
     diagnostics = read_frame(args.diagnostics, CONTACT_DIAGNOSTICS) if args.diagnostics \
         else None
