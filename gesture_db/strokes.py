@@ -79,14 +79,18 @@ def _sustained(plan: pd.DataFrame, i: int, j: int, t: np.ndarray, v: np.ndarray,
     contact_edges(t, force, sl, on0, end, F[0], F[-1], run_init, run_end)
 
 
+def _one_note(plan: pd.DataFrame, i: int) -> tuple:
+    """Row ``i`` and its onset, stop (s), velocity (m/s), force (N), run start and run end."""
+    row = plan.iloc[i]
+    return (row, row["on"], row["stop"], row["vel"], row["force"],
+            row["run_position"] in ("init", "iso"), bool(plan["run_end"].iloc[i]))
+
+
 def _staccato(plan: pd.DataFrame, i: int, t: np.ndarray, v: np.ndarray, force: np.ndarray,
               sl: Slicer) -> None:
     """A velocity burst, then the bow rests on the string with the force kept."""
     cfg = simulator_config()["stroke"]
-    row = plan.iloc[i]
-    note_on, stop, V, F0 = row["on"], row["stop"], row["vel"], row["force"]
-    run_init = row["run_position"] in ("init", "iso")
-    run_end = bool(plan["run_end"].iloc[i])
+    row, note_on, stop, V, F0, run_init, run_end = _one_note(plan, i)
     s = sl(note_on, stop)
     tt = t[s]
     v[s] = row["direction"] * V * np.sin(np.pi * (tt - note_on) / (stop - note_on))
@@ -101,10 +105,7 @@ def _martele(plan: pd.DataFrame, i: int, t: np.ndarray, v: np.ndarray, force: np
              sl: Slicer, rng: np.random.Generator) -> None:
     """Force before motion, a sharp attack, the force released after."""
     cfg = simulator_config()["stroke"]
-    row = plan.iloc[i]
-    note_on, stop, V, F0 = row["on"], row["stop"], row["vel"], row["force"]
-    run_init = row["run_position"] in ("init", "iso")
-    run_end = bool(plan["run_end"].iloc[i])
+    row, note_on, stop, V, F0, run_init, run_end = _one_note(plan, i)
     s = sl(note_on, stop)
     tt = t[s]
     rise = np.pi * V / (2 * row["accel"])

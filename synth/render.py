@@ -114,11 +114,12 @@ def render_with_diagnostics(
     inst = _engine(instrument, engine, sample_rate, seed, options)
     audio, table = inst.render(actions, tail=tail, progress=progress,
                                diagnostics=diagnostics and inst.has_diagnostics)
-    check_audio(audio)
+    check_audio(audio, sample_rate=inst.sample_rate)
     return audio, table
 
 
-def check_audio(audio: np.ndarray, ceiling: float = AUDIO_CEILING) -> None:
+def check_audio(audio: np.ndarray, ceiling: float = AUDIO_CEILING, *,
+                sample_rate: int = 44100) -> None:
     """Refuse audio that is not finite or peaks above ``ceiling`` (full scale = 1).
 
     Raises
@@ -132,16 +133,16 @@ def check_audio(audio: np.ndarray, ceiling: float = AUDIO_CEILING) -> None:
     >>> check_audio(np.array([0.0, 0.1, 20.0]))  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    data_schemas.errors.ParameterError: the rendered audio peaks at 20 x full scale ...
+    data_schemas.errors.ParameterError: the audio peaks at 20 x full scale ...
     """
     bad = ~np.isfinite(audio)
     if bad.any():
         first = int(np.flatnonzero(bad)[0])
-        raise ParameterError(f"the rendered audio is not finite from sample {first} "
-                             f"({first / 44100:.3f} s at 44100 Hz)")
+        raise ParameterError(f"the audio is not finite from sample {first} "
+                             f"({first / sample_rate:.3f} s at {sample_rate} Hz)")
     peak = float(np.max(np.abs(audio))) if audio.size else 0.0
     if peak > ceiling:
         first = int(np.flatnonzero(np.abs(audio) > ceiling)[0])
-        raise ParameterError(f"the rendered audio peaks at {peak:.3g} x full scale (ceiling "
+        raise ParameterError(f"the audio peaks at {peak:.3g} x full scale (ceiling "
                              f"{ceiling:g}) from sample {first}: check the actions' forces and "
                              "beta")

@@ -23,6 +23,7 @@ from synth.listening.teacher import (
     judge,
     reference_force,
 )
+from synth.render import check_audio
 
 MF_RATIO = 0.33 / 0.10  # velocity / beta of the mezzo-forte lane
 SETTLE = 0.05  # s after a note's start before hops count as sustained
@@ -101,11 +102,7 @@ def check_playable(audio: np.ndarray, sample_rate: int) -> None:
     ...
     data_schemas.errors.ParameterError: the audio is silent (peak 0 of full scale)
     """
-    bad = ~np.isfinite(audio)
-    if bad.any():
-        first = int(np.flatnonzero(bad)[0])
-        raise ParameterError(f"the audio is not finite from sample {first} "
-                             f"({first / sample_rate:.3f} s)")
+    check_audio(audio, np.inf, sample_rate=sample_rate)
     peak = float(np.max(np.abs(audio))) if audio.size else 0.0
     if peak < SILENT_PEAK:
         raise ParameterError(f"the audio is silent (peak {peak:.3g} of full scale)")
