@@ -27,7 +27,7 @@ from data_schemas.instruments import INSTRUMENT_NAMES
 from data_schemas.io import read_table, to_arrow, write_table
 from data_schemas.spec import Column, TableSpec
 
-NOTES_VERSION = "1.0"
+NOTES_VERSION = "1.1"
 
 #: Positions of a note in a slur or in a run of notes without rests.
 POSITIONS = ("init", "mid", "end", "iso")
@@ -37,6 +37,13 @@ INSTRUMENTS = INSTRUMENT_NAMES
 TECHNIQUES = ("pizz", "col_legno", "sul_ponticello", "sul_tasto")
 #: Bow-region words, from frog to tip.
 BOW_REGIONS = ("frog", "lower_half", "middle", "upper_half", "tip")
+#: Ornaments the rules play as finger figures (``ornament`` column).
+ORNAMENTS = ("trill", "mordent", "inverted_mordent", "turn", "inverted_turn", "delayed_turn",
+             "delayed_inverted_turn")
+#: Grace-note kinds: slashed (short, before the beat) or not (on the beat, takes time).
+GRACE_TYPES = ("acciaccatura", "appoggiatura")
+#: Harmonic kinds (``midi_pitch`` is always the sounding pitch).
+HARMONIC_TYPES = ("natural", "artificial")
 #: Dynamic marks and their value on the ``dynamic`` scale.
 DYNAMIC_LEVELS = {
     "pppp": 0.0, "ppp": 1.0, "pp": 2.0, "p": 3.0, "mp": 4.0,
@@ -134,7 +141,20 @@ NOTES = TableSpec(
         Column("technique", pa.string(), "",
                "Technique in effect: pizz, col_legno, sul_ponticello, sul_tasto; null = arco.",
                nullable=True),
-        Column("harmonic", pa.bool_(), "", "The note is notated as a harmonic."),
+        Column("harmonic", pa.bool_(), "", "The note is notated as a harmonic (midi_pitch is "
+               "the sounding pitch)."),
+        Column("harmonic_type", pa.string(), "", "natural or artificial; null = not a harmonic.",
+               nullable=True, required=False),
+        Column("ornament", pa.string(), "",
+               "Ornament on the note: trill (tr or wavy line), mordent (lower neighbour), "
+               "inverted_mordent (upper), turn, inverted_turn, delayed_turn, "
+               "delayed_inverted_turn; null = none.", nullable=True, required=False),
+        Column("ornament_upper", pa.int8(), "semitones",
+               "Upper auxiliary of the ornament above midi_pitch (key and accidental applied).",
+               nullable=True, required=False, minimum=0, maximum=12),
+        Column("ornament_lower", pa.int8(), "semitones",
+               "Lower auxiliary of the ornament below midi_pitch (key and accidental applied).",
+               nullable=True, required=False, minimum=0, maximum=12),
         Column("bow_region", pa.string(), "",
                "Bow-region word in effect: frog, lower_half, middle, upper_half, tip; null = "
                "free.", nullable=True),
@@ -142,10 +162,18 @@ NOTES = TableSpec(
                "String the score asks for (0 = lowest), from I-IV or 'sul G' marks; null = free.",
                nullable=True, minimum=0, maximum=3),
         Column("grace", pa.bool_(), "", "Grace note (no notated duration)."),
+        Column("grace_type", pa.string(), "",
+               "acciaccatura (slashed: short, before the beat) or appoggiatura (on the beat, "
+               "taking time from the next note); null = not a grace note.", nullable=True,
+               required=False),
         Column("chord_size", pa.int8(), "1", "Number of notes sounding together in this chord "
                "(1 = single note, 2 = double stop).", minimum=1),
         Column("chord_index", pa.int8(), "1", "Index of this note in its chord, 0 = lowest.",
                minimum=0),
+        Column("movement", pa.int16(), "1", "Movement of the work, from 1 (measure numbers "
+               "restart in each).", nullable=True, required=False, minimum=1),
+        Column("movement_title", pa.string(), "", "The movement's heading (its first tempo "
+               "words), if any.", nullable=True, required=False),
     ),
     checks=(
         _in_set("slur_position", POSITIONS),
@@ -153,9 +181,36 @@ NOTES = TableSpec(
         _in_set("instrument", INSTRUMENTS),
         _in_set("technique", TECHNIQUES),
         _in_set("bow_region", BOW_REGIONS),
+        _in_set("ornament", ORNAMENTS),
+        _in_set("grace_type", GRACE_TYPES),
+        _in_set("harmonic_type", HARMONIC_TYPES),
         _chord_index_below_size,
     ),
 )
+
+
+#: Notation a reader found and Arco does not perform, one row per mark.
+UNPERFORMED = TableSpec(
+    name="unperformed",
+    version="1.0",
+    description="Marks of a score that Arco read but does not perform (kind, where).",
+    columns=(
+        Column("part_index", pa.int16(), "1", "Part number in score order, from 0.", minimum=0),
+        Column("part_name", pa.string(), "", "Part name as printed (may be empty)."),
+        Column("movement", pa.int16(), "1", "Movement, from 1.", minimum=1),
+        Column("measure", pa.int32(), "1", "Measure number as printed in the score."),
+        Column("kind", pa.string(), "",
+               "family:ClassName of the mark (articulation:, expression:, spanner:, element:) "
+               "or text (words no rule understands)."),
+        Column("detail", pa.string(), "", "What the mark says (its text or value), if any."),
+    ),
+)
+
+
+def validate_unperformed(table: pd.DataFrame | pa.Table,
+                         source: str = "<unperformed>") -> pd.DataFrame:
+    """Validate an unperformed-marks table and return it with canonical dtypes."""
+    return UNPERFORMED.conform(to_arrow(table), source=source).to_pandas()
 
 
 def empty_notes() -> pd.DataFrame:
@@ -203,7 +258,8 @@ def validate_notes(notes: pd.DataFrame | pa.Table, source: str = "<notes>") -> p
     return _to_pandas(NOTES.conform(to_arrow(notes), source=source))
 
 
-_NULLABLE_INT = {"slur_id": "Int32", "string_indication": "Int8"}
+_NULLABLE_INT = {"slur_id": "Int32", "string_indication": "Int8", "ornament_upper": "Int8",
+                 "ornament_lower": "Int8", "movement": "Int16"}
 
 
 def _to_pandas(table: pa.Table) -> pd.DataFrame:
@@ -217,13 +273,18 @@ __all__ = [
     "ARTICULATIONS",
     "BOW_REGIONS",
     "DYNAMIC_LEVELS",
+    "GRACE_TYPES",
+    "HARMONIC_TYPES",
     "INSTRUMENTS",
     "NOTES",
     "NOTES_VERSION",
+    "ORNAMENTS",
     "POSITIONS",
     "TECHNIQUES",
+    "UNPERFORMED",
     "empty_notes",
     "read_notes",
     "validate_notes",
+    "validate_unperformed",
     "write_notes",
 ]

@@ -19,11 +19,13 @@ from data_schemas.lazy import lazy_exports
 
 if TYPE_CHECKING:  # pragma: no cover - where each name lives (read by lazy_exports)
     from pipelines.score.bundled import DEMO_SCORE, bundled_score
-    from pipelines.score.dispatch import READERS, read_score
+    from pipelines.score.dispatch import READERS, read_score, read_score_report
     from pipelines.score.errors import ScoreError
-    from pipelines.score.select import choose_parts, select_measures
+    from pipelines.score.select import choose_parts, list_movements, select_measures, \
+        select_movement
 
 __all__ = ["DEMO_SCORE", "READERS", "ScoreError", "bundled_score", "choose_parts",
-           "read_score", "select_measures"]
+           "list_movements", "read_score", "read_score_report", "select_measures",
+           "select_movement"]
 
 __getattr__, __dir__ = lazy_exports(__name__, __file__)

@@ -13,7 +13,13 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.instruments import instrument_facts
-from data_schemas.notes import ARTICULATIONS, NOTES, validate_notes
+from data_schemas.notes import (
+    ARTICULATIONS,
+    NOTES,
+    UNPERFORMED,
+    validate_notes,
+    validate_unperformed,
+)
 from pipelines.perform.instruments import guess_instrument, string_index
 from pipelines.score.errors import ScoreError
 from pipelines.score.tempo import TempoMap
@@ -48,6 +54,11 @@ class RawPart:
         ``(beat, text)`` of printed words (techniques, regions, strings, cresc. ...).
     slurs : list of (int, float, float)
         ``(voice, first_onset_beat, last_onset_beat)``.
+    unperformed : list of dict
+        Marks the reader found and Arco does not perform: ``measure``, ``movement``,
+        ``kind``, ``detail`` (see :data:`data_schemas.notes.UNPERFORMED`).
+    movement_titles : dict of int to str
+        Heading of each movement (its first words).
     """
 
     index: int
@@ -59,6 +70,8 @@ class RawPart:
     hairpins: list[tuple[float, float, int]] = field(default_factory=list)
     words: list[tuple[float, str]] = field(default_factory=list)
     slurs: list[tuple[int, float, float]] = field(default_factory=list)
+    unperformed: list[dict] = field(default_factory=list)
+    movement_titles: dict[int, str] = field(default_factory=dict)
 
 
 def assemble(parts: list[RawPart], tempo: TempoMap, source: str) -> pd.DataFrame:
@@ -84,28 +97,59 @@ def assemble(parts: list[RawPart], tempo: TempoMap, source: str) -> pd.DataFrame
     ScoreError
         The score holds no notes.
     """
-    frames = [_assemble_part(p, tempo, source) for p in parts if p.notes]
+    return assemble_report(parts, tempo, source)[0]
+
+
+def assemble_report(parts: list[RawPart], tempo: TempoMap,
+                    source: str) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """:func:`assemble`, plus the table of marks not performed.
+
+    Returns
+    -------
+    notes : pandas.DataFrame
+        The notes table.
+    unperformed : pandas.DataFrame
+        :data:`data_schemas.notes.UNPERFORMED`, in part and score order.
+    """
+    titles: dict[int, str] = {}
+    for p in parts:
+        for k, v in p.movement_titles.items():
+            titles.setdefault(k, v)
+    frames = [_assemble_part(p, tempo, source, titles) for p in parts if p.notes]
     if not frames:
         raise ScoreError(f"{source}: the score holds no notes")
     table = pd.concat(frames, ignore_index=True)
-    return validate_notes(table[NOTES.column_names], source=source)
+    rows = [{"part_index": p.index, "part_name": p.name, "detail": "", **mark}
+            for p in parts for mark in p.unperformed]
+    columns = [c.name for c in UNPERFORMED.columns]
+    unperformed = validate_unperformed(pd.DataFrame(rows, columns=columns), source=source)
+    return validate_notes(table[NOTES.column_names], source=source), unperformed
 
 
-def _assemble_part(part: RawPart, tempo: TempoMap, source: str) -> pd.DataFrame:
+def _assemble_part(part: RawPart, tempo: TempoMap, source: str,
+                   titles: dict[int, str]) -> pd.DataFrame:
     df = pd.DataFrame(part.notes)
     defaults = {name: False for name in (*ARTICULATIONS, "tie_start", "tie_stop", "grace",
                                          "harmonic")}
     defaults.update({"cents": 0.0, "voice": 1, "chord_size": 1, "chord_index": 0,
-                     "string_indication": None})
+                     "string_indication": None, "movement": 1, "ornament": None,
+                     "ornament_upper": None, "ornament_lower": None, "grace_type": None,
+                     "harmonic_type": None})
     for name, value in defaults.items():
         if name not in df:
             df[name] = value
         elif isinstance(value, bool):
             df[name] = df[name].fillna(value).astype(bool)
+    for name in ("ornament_upper", "ornament_lower"):
+        df[name] = pd.array([None if pd.isna(v) else int(v) for v in df[name]], dtype="Int8")
+    for name in ("ornament", "grace_type", "harmonic_type"):
+        df[name] = [v if isinstance(v, str) else None for v in df[name]]
     df = df.sort_values(["onset_beats", "voice", "grace", "midi_pitch"],
                         ascending=[True, True, False, True], kind="stable")
     df = df.reset_index(drop=True)
     instrument = guess_instrument(part.names, df["midi_pitch"].to_numpy())
+    df["movement"] = df["movement"].fillna(1).astype(int)
+    df["movement_title"] = [titles.get(int(m)) for m in df["movement"]]
     df["source_file"] = source
     df["part_index"] = part.index
     df["part_id"] = part.part_id

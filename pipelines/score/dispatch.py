@@ -17,6 +17,8 @@ READERS = {
     ".mid": ("pipelines.score.midi", "read_midi"),
     ".midi": ("pipelines.score.midi", "read_midi"),
 }
+#: Readers that also report the marks they do not perform (MIDI holds none).
+_REPORTERS = {"pipelines.score.musicxml": "read_musicxml_report"}
 
 
 def read_score(path: str | os.PathLike) -> pd.DataFrame:
@@ -37,7 +39,21 @@ def read_score(path: str | os.PathLike) -> pd.DataFrame:
     ScoreError
         Unsupported extension, missing, empty or corrupt file (the message names the file).
     """
+    return read_score_report(path)[0]
+
+
+def read_score_report(path: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """:func:`read_score`, plus every mark read and not performed.
+
+    Returns
+    -------
+    notes : pandas.DataFrame
+    unperformed : pandas.DataFrame
+        :data:`data_schemas.notes.UNPERFORMED` (empty for MIDI).
+    """
     import importlib
+
+    from data_schemas.notes import UNPERFORMED, validate_unperformed
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -47,4 +63,8 @@ def read_score(path: str | os.PathLike) -> pd.DataFrame:
     if not path.is_file():
         raise ScoreError(f"{path}: file not found")
     module, func = READERS[suffix]
-    return getattr(importlib.import_module(module), func)(path)
+    if module in _REPORTERS:
+        return getattr(importlib.import_module(module), _REPORTERS[module])(path)
+    notes = getattr(importlib.import_module(module), func)(path)
+    empty = pd.DataFrame({c.name: [] for c in UNPERFORMED.columns})
+    return notes, validate_unperformed(empty, source=str(path))

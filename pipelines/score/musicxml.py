@@ -4,13 +4,21 @@ from __future__ import annotations
 
 import os
 import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
 
 from data_schemas.notes import DYNAMIC_LEVELS
-from pipelines.score.assemble import RawPart, assemble
+from pipelines.score.assemble import RawPart, assemble_report
 from pipelines.score.errors import ScoreError
+from pipelines.score.marks import (
+    grace_type,
+    harmonic_pitch,
+    is_reported,
+    mark_kind,
+    ornament_flags,
+)
 from pipelines.score.tempo import TempoMap
 from pipelines.score.text import classify, tempo_from_words
 
@@ -54,9 +62,21 @@ def read_musicxml(path: str | os.PathLike) -> pd.DataFrame:
     ScoreError
         The file is missing, empty, corrupt, or holds no notes.
     """
+    return read_musicxml_report(path)[0]
+
+
+def read_musicxml_report(path: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """:func:`read_musicxml`, plus the marks not performed.
+
+    Returns
+    -------
+    notes : pandas.DataFrame
+    unperformed : pandas.DataFrame
+        :data:`data_schemas.notes.UNPERFORMED`: every mark read and not performed.
+    """
     path = Path(path)
     score = parse_musicxml(path)
-    return notes_from_music21(score, source=str(path))
+    return notes_from_music21(score, source=str(path), report=True)
 
 
 def parse_musicxml(path: Path):
@@ -77,7 +97,7 @@ def parse_musicxml(path: Path):
     return score
 
 
-def notes_from_music21(score, *, source: str = "<music21>") -> pd.DataFrame:
+def notes_from_music21(score, *, source: str = "<music21>", report: bool = False):
     """Build the notes table from a parsed music21 score (or a single part).
 
     Parameters
@@ -86,11 +106,13 @@ def notes_from_music21(score, *, source: str = "<music21>") -> pd.DataFrame:
         The parsed score.
     source : str
         Name used in the ``source_file`` column and in error messages.
+    report : bool
+        Also return the marks not performed.
 
     Returns
     -------
-    pandas.DataFrame
-        The notes table.
+    pandas.DataFrame or (pandas.DataFrame, pandas.DataFrame)
+        The notes table (and :data:`data_schemas.notes.UNPERFORMED` when ``report``).
     """
     from music21 import stream
 
@@ -103,7 +125,8 @@ def notes_from_music21(score, *, source: str = "<music21>") -> pd.DataFrame:
         raw, tempi = _read_part(part, index, source)
         raws.append(raw)
         tempo_points.extend(tempi)
-    return assemble(raws, _tempo_map(tempo_points), source)
+    notes, unperformed = assemble_report(raws, _tempo_map(tempo_points), source)
+    return (notes, unperformed) if report else notes
 
 
 def _tempo_map(points: list[tuple[float, float, bool]]) -> TempoMap:
@@ -137,16 +160,18 @@ def _read_part(part, index: int,
 
     name = part.partName or str(part.id or f"P{index + 1}")
     raw = RawPart(index=index, part_id=str(part.id), name=name, names=_part_names(part))
-    where: dict[int, tuple[float, int, float]] = {}
-    sforzandi: list[float] = []
-    tempi: list[tuple[float, float, bool]] = []
-    main_tempo: float | None = None
+    state = _PartState(source=source, name=name)
     measures = list(part.getElementsByClass(stream.Measure))
     if not measures:
         measures = [part]
+    previous = None
     for m in measures:
         base = float(m.offset) if m is not part else 0.0
         number = int(m.number) if getattr(m, "number", None) is not None else 0
+        if previous is not None and number < previous:  # numbers restart: a new movement
+            state.movement += 1
+        previous = number
+        state.measure = number
         containers = [(m, 1, 0.0)]
         for k, v in enumerate(m.getElementsByClass(stream.Voice)):
             containers.append((v, _voice_number(v, k + 1), float(v.offset)))
@@ -156,39 +181,97 @@ def _read_part(part, index: int,
                 classes = el.classSet
                 if "GeneralNote" in classes:
                     if "Rest" in classes or "Unpitched" in classes:
+                        _report_note_marks(raw, el, state)
                         continue
-                    _add_note(raw, el, beat, number, voice, where)
-                elif "Dynamic" in classes:
-                    value = str(el.value)
-                    if value in DYNAMIC_LEVELS:
-                        raw.dynamics.append((beat, DYNAMIC_LEVELS[value]))
-                    elif value in _SFORZANDI:
-                        sforzandi.append(beat)
-                        if _SFORZANDI[value] is not None:
-                            raw.dynamics.append((beat, _SFORZANDI[value]))
-                elif "MetronomeMark" in classes:
-                    bpm = _metronome_bpm(el, f"{source}: part {name!r} measure {number}")
-                    if bpm:
-                        tempi.append((beat, float(bpm), True))
-                        main_tempo = float(bpm)
-                elif "TextExpression" in classes or "TempoText" in classes:
-                    text = str(getattr(el, "content", None) or getattr(el, "text", "") or "")
-                    if not text:
-                        continue
-                    raw.words.append((beat, text))
-                    bpm = _word_tempo(text)
-                    if bpm is not None:
-                        tempi.append((beat, bpm, False))
-                        main_tempo = bpm
-                    elif main_tempo and any(d.kind == "a_tempo" for d in classify(text)):
-                        tempi.append((beat, main_tempo, False))
-    _add_spanners(raw, part, where)
-    if sforzandi:
-        beats = {round(b, 4) for b in sforzandi}
+                    _add_note(raw, el, beat, number, voice, state)
+                else:
+                    _read_direction(raw, el, beat, state)
+    _add_spanners(raw, part, state)
+    if state.sforzandi:
+        beats = {round(b, 4) for b in state.sforzandi}
         for note in raw.notes:
             if round(note["onset_beats"], 4) in beats:
                 note["accent"] = True
-    return raw, tempi
+    return raw, state.tempi
+
+
+@dataclass
+class _PartState:
+    """What the reader keeps while it walks one part."""
+
+    source: str
+    name: str
+    movement: int = 1
+    measure: int = 0
+    main_tempo: float | None = None
+    sforzandi: list[float] = field(default_factory=list)
+    tempi: list[tuple[float, float, bool]] = field(default_factory=list)
+    where: dict[int, tuple[float, int, float]] = field(default_factory=dict)
+
+    def report(self, raw: RawPart, kind: str, detail: str = "") -> None:
+        raw.unperformed.append({"measure": self.measure, "movement": self.movement,
+                                "kind": kind, "detail": detail})
+
+
+def _read_direction(raw: RawPart, el, beat: float, state: _PartState) -> None:
+    """Dynamics, tempo marks and words; every other element is checked against the inventory."""
+    classes = el.classSet
+    if "Dynamic" in classes:
+        value = str(el.value)
+        if value in DYNAMIC_LEVELS:
+            raw.dynamics.append((beat, DYNAMIC_LEVELS[value]))
+        elif value in _SFORZANDI:
+            state.sforzandi.append(beat)
+            if _SFORZANDI[value] is not None:
+                raw.dynamics.append((beat, _SFORZANDI[value]))
+        else:
+            state.report(raw, "element:Dynamic", value)
+    elif "MetronomeMark" in classes:
+        bpm = _metronome_bpm(el, f"{state.source}: part {state.name!r} measure {state.measure}")
+        if bpm:
+            state.tempi.append((beat, float(bpm), True))
+            state.main_tempo = float(bpm)
+        _title(raw, state, str(getattr(el, "text", None) or ""))
+    elif "TextExpression" in classes or "TempoText" in classes:
+        text = str(getattr(el, "content", None) or getattr(el, "text", "") or "")
+        if not text:
+            return
+        raw.words.append((beat, text))
+        _title(raw, state, text)
+        bpm = _word_tempo(text)
+        if bpm is not None:
+            state.tempi.append((beat, bpm, False))
+            state.main_tempo = bpm
+        elif state.main_tempo and any(d.kind == "a_tempo" for d in classify(text)):
+            state.tempi.append((beat, state.main_tempo, False))
+        elif not classify(text):
+            state.report(raw, "text", text.strip()[:60])
+    else:
+        kind = mark_kind("element", el)
+        if is_reported(kind):
+            state.report(raw, kind, _describe(el))
+
+
+def _title(raw: RawPart, state: _PartState, text: str) -> None:
+    """The first words of a movement head it."""
+    if text.strip() and state.movement not in raw.movement_titles:
+        raw.movement_titles[state.movement] = text.strip()[:80]
+
+
+def _describe(el) -> str:
+    for attribute in ("content", "text", "value", "name", "direction"):
+        value = getattr(el, attribute, None)
+        if isinstance(value, str) and value:
+            return value[:60]
+    return ""
+
+
+def _report_note_marks(raw: RawPart, el, state: _PartState) -> None:
+    """Marks on a rest (or an unpitched note) are never played."""
+    for art in el.articulations:
+        state.report(raw, mark_kind("articulation", art), "on a rest")
+    for exp in el.expressions:
+        state.report(raw, mark_kind("expression", exp), "on a rest")
 
 
 def _metronome_bpm(mark, where: str) -> float | None:
@@ -206,36 +289,21 @@ def _word_tempo(text: str) -> float | None:
 
 
 def _add_note(raw: RawPart, el, beat: float, measure: int, voice: int,
-              where: dict[int, tuple[float, int, float]]) -> None:
+              state: _PartState) -> None:
     grace = bool(el.duration.isGrace)
     duration = 0.0 if grace else float(el.duration.quarterLength)
-    flags: dict[str, object] = {}
-    for art in el.articulations:
-        cls = type(art).__name__
-        column = _ARTICULATIONS.get(cls)
-        if column is not None:
-            flags[column] = True
-        elif cls in _PLUCKED:
-            flags["technique_note"] = "pizz"
-        elif cls == "StringIndication" and getattr(art, "number", None):
-            flags["string_indication"] = max(0, 4 - int(art.number))
-    if flags.get("staccato") and flags.get("tenuto"):
-        flags["portato"] = True
-    for exp in el.expressions:
-        cls = type(exp).__name__
-        if cls == "Fermata":
-            flags["fermata"] = True
-        elif cls in ("Tremolo", "TremoloSpanner"):
-            flags["tremolo"] = True
+    flags = _note_flags(raw, el, state)
     members = list(el.notes) if "Chord" in el.classSet else [el]
-    pitched = [(n.pitch.ps, n) for n in members]
-    pitched.sort(key=lambda p: p[0])
-    where[id(el)] = (beat, voice, duration)
+    pitched = sorted(((n.pitch.ps, n) for n in members), key=lambda p: p[0])
+    if flags.get("harmonic") or any(getattr(n, "notehead", "") == "diamond" for _, n in pitched):
+        pitched = _sounding(pitched, flags, raw)
+    state.where[id(el)] = (beat, voice, duration)
     for k, (ps, n) in enumerate(pitched):
         midi = int(round(ps))
         tie = n.tie.type if n.tie is not None else (el.tie.type if el.tie is not None else None)
         note = {
             "measure": measure,
+            "movement": state.movement,
             "voice": voice,
             "onset_beats": beat,
             "duration_beats": duration,
@@ -244,17 +312,68 @@ def _add_note(raw: RawPart, el, beat: float, measure: int, voice: int,
             "tie_start": tie in ("start", "continue"),
             "tie_stop": tie in ("stop", "continue"),
             "grace": grace,
+            "grace_type": grace_type(el),
             "chord_size": len(pitched),
             "chord_index": k,
             **flags,
         }
-        if getattr(n, "notehead", "normal") == "diamond":
-            note["harmonic"] = True
         raw.notes.append(note)
-        where[id(n)] = (beat, voice, duration)
+        state.where[id(n)] = (beat, voice, duration)
 
 
-def _add_spanners(raw: RawPart, part, where: dict[int, tuple[float, int, float]]) -> None:
+def _note_flags(raw: RawPart, el, state: _PartState) -> dict[str, object]:
+    """Articulations and expressions of a note as notes-table columns; report the rest."""
+    flags: dict[str, object] = {}
+    for art in el.articulations:
+        cls = type(art).__name__
+        column = _ARTICULATIONS.get(cls)
+        if column is not None:
+            flags[column] = True
+            if column == "harmonic":
+                flags["harmonic_type"] = "artificial" if getattr(
+                    art, "harmonicType", "natural") == "artificial" else "natural"
+        elif cls in _PLUCKED:
+            flags["technique_note"] = "pizz"
+        elif cls == "StringIndication" and getattr(art, "number", None):
+            flags["string_indication"] = max(0, 4 - int(art.number))
+        else:
+            state.report(raw, mark_kind("articulation", art), _describe(art))
+    if flags.get("staccato") and flags.get("tenuto"):
+        flags["portato"] = True
+    for exp in el.expressions:
+        cls = type(exp).__name__
+        if cls == "Fermata":
+            flags["fermata"] = True
+        elif cls in ("Tremolo", "TremoloSpanner"):
+            flags["tremolo"] = True
+        elif (orn := ornament_flags(el, exp)) is not None and "ornament" not in flags:
+            flags.update(orn)
+        else:
+            state.report(raw, mark_kind("expression", exp), _describe(exp))
+    return flags
+
+
+def _sounding(pitched: list, flags: dict[str, object], raw: RawPart) -> list:
+    """A harmonic sounds at its sounding pitch: an artificial one is one note, not two."""
+    from data_schemas.instruments import instrument_facts
+    from pipelines.perform.instruments import guess_instrument
+
+    written = [p for p, _ in pitched]
+    diamonds = [getattr(n, "notehead", "") == "diamond" for _, n in pitched]
+    instrument = guess_instrument(raw.names, [int(round(p)) for p in written])
+    opens = tuple(float(m) for m in instrument_facts(instrument).open_strings)
+    found = harmonic_pitch(written, diamonds, opens) if len(written) <= 2 else None
+    flags["harmonic"] = True
+    if found is None:
+        flags.setdefault("harmonic_type", "natural")
+        return pitched
+    midi, kind = found
+    flags["harmonic_type"] = kind
+    return [(midi, pitched[0][1])]
+
+
+def _add_spanners(raw: RawPart, part, state: _PartState) -> None:
+    where = state.where
     for sp in part.spanners:
         classes = sp.classSet
         elements = [e for e in sp.getSpannedElements() if id(e) in where]
@@ -269,7 +388,27 @@ def _add_spanners(raw: RawPart, part, where: dict[int, tuple[float, int, float]]
             end = max(last[0] + last[2], first[0] + first[2])
             raw.hairpins.append((first[0], end, direction))
         elif "TremoloSpanner" in classes:
-            beats = {round(where[id(e)][0], 6) for e in elements}
-            for note in raw.notes:
-                if round(note["onset_beats"], 6) in beats:
-                    note["tremolo"] = True
+            _mark_notes(raw, elements, where, {"tremolo": True})
+        elif "TrillExtension" in classes:
+            _wavy_line(raw, elements, where)
+        elif is_reported(kind := mark_kind("spanner", sp)):
+            state.measure = int(getattr(elements[0], "measureNumber", None) or 0)
+            state.report(raw, kind, _describe(sp))
+
+
+def _mark_notes(raw: RawPart, elements: list, where: dict, flags: dict[str, object]) -> None:
+    beats = {round(where[id(e)][0], 6) for e in elements}
+    for note in raw.notes:
+        if round(note["onset_beats"], 6) in beats:
+            note.update(flags)
+
+
+def _wavy_line(raw: RawPart, elements: list, where: dict) -> None:
+    """Notes under a trill's wavy line trill (with the first note's auxiliary, if it has one)."""
+    beats = {round(where[id(e)][0], 6) for e in elements}
+    under = [n for n in raw.notes if round(n["onset_beats"], 6) in beats]
+    upper = next((n["ornament_upper"] for n in under if n.get("ornament") == "trill"), None)
+    for note in under:
+        if note.get("ornament") is None:
+            note["ornament"] = "trill"
+            note["ornament_upper"] = upper if upper is not None else 2

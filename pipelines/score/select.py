@@ -73,3 +73,55 @@ def choose_parts(notes: pd.DataFrame, part: str | None, all_parts: bool) -> list
         return partial
     raise ParameterError(f"--part {part!r} matches {len(partial) or 'no'} parts "
                          f"(parts: {listing})")
+
+
+def list_movements(notes: pd.DataFrame) -> pd.DataFrame:
+    """The movements of a notes table: ``movement``, ``title``, first and last measure.
+
+    Examples
+    --------
+    >>> notes = pd.DataFrame({"movement": [1, 1, 2], "movement_title": ["Allegro", "Allegro",
+    ...                       None], "measure": [1, 40, 1]})
+    >>> list_movements(notes).to_dict("records")[1]
+    {'movement': 2, 'title': '', 'first_measure': 1, 'last_measure': 1}
+    """
+    movement = _movement(notes)
+    frame = pd.DataFrame({"movement": movement, "title": notes["movement_title"].fillna("")
+                          if "movement_title" in notes else "",
+                          "measure": notes["measure"].to_numpy()})
+    grouped = frame.groupby("movement", sort=True)
+    out = pd.DataFrame({"title": grouped["title"].first(),
+                        "first_measure": grouped["measure"].min(),
+                        "last_measure": grouped["measure"].max()}).reset_index()
+    return out.astype({"movement": int, "first_measure": int, "last_measure": int})
+
+
+def select_movement(notes: pd.DataFrame, movement: int | None) -> pd.DataFrame:
+    """Keep the notes of movement ``movement`` (from 1), re-timed to start at 0.
+
+    ``None`` keeps a one-movement score whole and takes the first movement of a longer one.
+
+    Raises
+    ------
+    ParameterError
+        The score has no such movement (the message lists them).
+    """
+    numbers = _movement(notes)
+    available = sorted({int(m) for m in numbers})
+    if movement is None:
+        if len(available) == 1:
+            return notes
+        movement = available[0]
+    if movement not in available:
+        raise ParameterError(f"--movement {movement}: the score has movement(s) "
+                             f"{', '.join(str(m) for m in available)}")
+    keep = notes[numbers == movement].copy()
+    keep["onset"] = keep["onset"] - float(keep["onset"].min())
+    keep["onset_beats"] = keep["onset_beats"] - float(keep["onset_beats"].min())
+    return keep.reset_index(drop=True)
+
+
+def _movement(notes: pd.DataFrame) -> np.ndarray:
+    if "movement" not in notes:
+        return np.ones(len(notes), dtype=np.int64)
+    return pd.Series(notes["movement"]).fillna(1).to_numpy(dtype=np.int64)
