@@ -21,8 +21,12 @@ if TYPE_CHECKING:  # pragma: no cover - where each name lives (read by lazy_expo
     from pipelines.score.bundled import DEMO_SCORE, bundled_score
     from pipelines.score.dispatch import READERS, read_score, read_score_report
     from pipelines.score.errors import ScoreError
-    from pipelines.score.select import choose_parts, list_movements, select_measures, \
-        select_movement
+    from pipelines.score.select import (
+        choose_parts,
+        list_movements,
+        select_measures,
+        select_movement,
+    )
 
 __all__ = ["DEMO_SCORE", "READERS", "ScoreError", "bundled_score", "choose_parts",
            "list_movements", "read_score", "read_score_report", "select_measures",

@@ -165,8 +165,8 @@ def harmonic_pitch(written: list[float], diamonds: list[bool],
     (float, str) or None
         ``(midi, "artificial")`` for a stopped note with a diamond a fourth, fifth, major
         third or octave above; ``(midi, "natural")`` for a lone diamond at a node of an open
-        string (the lowest node that fits: octave, fifth, fourth...); ``None`` when the notes do not spell a harmonic (then the written pitch is
-        taken as sounding).
+        string (the lowest node that fits: octave, fifth, fourth...); ``None`` when the
+        notes do not spell a harmonic (then the written pitch is taken as sounding).
 
     Examples
     --------
