@@ -21,6 +21,7 @@ from data_schemas.instruments import finger_ratio, limits
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
+from pipelines.perform.ornaments import ornament_cents
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
             "bow_position", "pluck")
@@ -304,7 +305,8 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
             m = t >= sustain_from if n_roll else np.ones(t.shape, bool)
             for string, semis in zip(e.strings, e.semitones, strict=True):
                 rows.append(_rows(t[m], string, semis, force[m], s.direction * speed[m],
-                                  beta[m], pos[m], cents=string_cents(e, semis, t[m], config)))
+                                  beta[m], pos[m], cents=string_cents(e, semis, t[m], config)
+                                  + ornament_cents(e.ornament, t[m], floor=-100.0 * semis)))
             if k == last:
                 rows.extend(_after_stroke(events, k, t, force, beta, pos))
             elif t.size:

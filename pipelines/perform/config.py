@@ -97,6 +97,8 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
     "dynamics": {"beta": 0.5, "velocity": 5.0, "force": 20.0},
     "skill": {"pitch_sigma": 12.0, "onset_sigma": 1.0},
     "vibrato": {"*": 20.0, "extent": 100.0, "onset_share": 1.0},
+    "ornaments": {"trill_subdivision": 32.0, "trill_min_rate": 30.0, "trill_max_rate": 30.0,
+                  "ornament_note": 0.5, "appoggiatura_share": 0.9},
 }
 
 
@@ -203,6 +205,7 @@ def _validate_expression(config: dict[str, Any], source: str) -> None:
         raise ParameterError(f"{source}: frames.interval={config['frames']['interval']!r} s "
                              f"is too coarse for a {vib['rate']} Hz vibrato (at most "
                              f"{1.0 / (8.0 * vib['rate']):.4f} s: 8 frames a cycle)")
+    _validate_ornaments(config, source)
     into = config["intonation"]
     if not _is_number(into["sigma"]) or not 0 <= into["sigma"] <= 100:
         raise ParameterError(f"{source}: intonation.sigma={into['sigma']!r} must be in "
@@ -210,6 +213,25 @@ def _validate_expression(config: dict[str, Any], source: str) -> None:
     if not _is_number(into["semitone_step"]) or abs(into["semitone_step"]) > 50:
         raise ParameterError(f"{source}: intonation.semitone_step="
                              f"{into['semitone_step']!r} must be in [-50, 50] cents")
+
+
+def _validate_ornaments(config: dict[str, Any], source: str) -> None:
+    orn = config["ornaments"]
+    for key in ("trill_subdivision", "trill_min_rate", "trill_max_rate", "ornament_note",
+                "appoggiatura_share"):
+        _positive(config, "ornaments", key, source)
+    if orn["trill_min_rate"] > orn["trill_max_rate"]:
+        raise ParameterError(f"{source}: ornaments.trill_min_rate={orn['trill_min_rate']!r} "
+                             f"is above trill_max_rate={orn['trill_max_rate']!r}")
+    if orn["trill_start"] not in ("upper", "main"):
+        raise ParameterError(f"{source}: ornaments.trill_start={orn['trill_start']!r} must be "
+                             "'upper' or 'main'")
+    if not isinstance(orn["trill_nachschlag"], bool):
+        raise ParameterError(f"{source}: ornaments.trill_nachschlag="
+                             f"{orn['trill_nachschlag']!r} must be true or false")
+    if config["frames"]["interval"] > 1.0 / (2.0 * orn["trill_max_rate"]):
+        raise ParameterError(f"{source}: frames.interval={config['frames']['interval']!r} s "
+                             f"is too coarse for trills of {orn['trill_max_rate']} notes/s")
 
 
 def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 
 from pipelines.perform.expression import Vibrato
+from pipelines.perform.ornaments import Ornament
 
 
 @dataclass
@@ -16,8 +17,9 @@ class Event:
 
     Times are performance times in seconds. ``strings``/``semitones`` are the sustained
     strings; ``roll`` lists (string, semitones) of lower chord notes played briefly first;
-    ``semitones`` include the note's intonation offset and ``vibrato`` is its finger's
-    vibrato (:mod:`pipelines.perform.expression`).
+    ``semitones`` include the note's intonation offset, ``vibrato`` is its finger's
+    vibrato (:mod:`pipelines.perform.expression`) and ``ornament`` its trill, mordent or
+    turn (:mod:`pipelines.perform.ornaments`).
     """
 
     rows: list[int]
@@ -47,6 +49,7 @@ class Event:
     slur_position: str = "iso"
     run_position: str = "iso"
     vibrato: Vibrato | None = None
+    ornament: Ornament | None = None
 
 
 @dataclass

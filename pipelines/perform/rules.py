@@ -6,7 +6,8 @@ table), slurs keep the bow direction, other notes decelerate to rest and reverse
 everything, staccato / portato / breath marks shorten, accents add force, the last note on a
 string is lightened, bow-region words place the bow, up/down-bow marks set the direction,
 pizz./arco switch plucking, string marks force the string; plus tremolo (fast bow changes),
-fermata (every part waits), grace notes, double stops, and a bow-length budget. Every change
+fermata (every part waits), grace notes and ornaments (:mod:`pipelines.perform.ornaments`),
+double stops, and a bow-length budget. Every change
 of bow velocity respects the maximum bow acceleration.
 
 The work is split in three steps: :func:`build_events` (notes -> timed events with strings,
@@ -27,6 +28,7 @@ from data_schemas.instruments import instrument_facts
 from pipelines.perform.events import Event, Performance
 from pipelines.perform.expression import assign_vibrato, intonation_cents
 from pipelines.perform.instruments import choose_strings, fit_range
+from pipelines.perform.ornaments import assign_ornaments, time_graces
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
 _MIN_DURATION = 0.005  # s
@@ -139,7 +141,7 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
         rows = rows[np.argsort(cols["midi_pitch"][rows], kind="stable")]
         events.append(_event(rows, cols, st, semis, rolled, onset, end))
     events = _merge_ties(events, cols)
-    _graces(events, cols, art["grace_duration"])
+    time_graces(events, cols, config)
     onset_sigma = config["skill"]["onset_sigma"][skill]
     if onset_sigma > 0:
         for e in events:
@@ -149,6 +151,7 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     events = _tremolo(events, cols, art["tremolo_stroke"])
     _articulate(events, cols, config)
     assign_vibrato(events, config, rng)
+    assign_ornaments(events, cols, config)
     return events
 
 
@@ -197,33 +200,6 @@ def _merge_ties(events: list[Event], cols: dict[str, np.ndarray]) -> list[Event]
             e.cont = True
         out.append(e)
     return out
-
-
-def _graces(events: list[Event], cols: dict[str, np.ndarray], grace: float) -> None:
-    """Grace notes take their time from the following note, slurred into it."""
-    k = 0
-    while k < len(events):
-        if not cols["grace"][events[k].rows[0]]:
-            k += 1
-            continue
-        j = k
-        while j < len(events) and cols["grace"][events[j].rows[0]]:
-            j += 1
-        if j >= len(events):
-            for e in events[k:j]:
-                e.end = e.t0 + grace
-            break
-        main = events[j]
-        g = min(grace, 0.5 * (main.end - main.t0) / (j - k))
-        for n, e in enumerate(events[k:j]):
-            e.t0 = main.t0 + n * g
-            e.end = e.t0 + g
-            e.dynamic = main.dynamic
-            if n > 0:
-                e.cont = True
-        main.t0 += (j - k) * g
-        main.cont = True
-        k = j + 1
 
 
 def _clip_times(events: list[Event]) -> None:
