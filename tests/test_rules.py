@@ -79,7 +79,7 @@ def plays(perf, pitch: int, a: float, b: float) -> bool:
 
 def test_every_note_starts_at_its_score_onset(notes, perf):
     """Each note (tie continuations aside) sounds from its score onset: at once, after the
-    grace notes before it, or after the lower notes of a rolled chord (the notes table says
+    appoggiaturas before it, a grace_duration per acciaccatura before it, or after the lower notes of a rolled chord (the notes table says
     which; the performance's own event times are not used)."""
     validate_actions(perf.actions)
     art = CFG["articulations"]
@@ -87,7 +87,11 @@ def test_every_note_starts_at_its_score_onset(notes, perf):
     for _, n in notes[~notes["tie_stop"]].iterrows():
         t = at(n["onset"])
         graces = notes["grace"] & (notes["onset"] == n["onset"])
-        delay = art["grace_duration"] * int(graces.sum()) if not n["grace"] else 0.0
+        # appoggiaturas are played on the beat, acciaccaturas (slashed) just before it
+        on_beat = graces & (notes["grace_type"] == "appoggiatura")
+        delay = art["grace_duration"] * int(on_beat.sum()) if not n["grace"] else 0.0
+        if n["grace"] and n["grace_type"] == "acciaccatura":
+            t -= art["grace_duration"] * int(graces.sum())
         if n["chord_size"] > 2:  # rolled: two strings at once, then one more per roll_time
             delay += art["roll_time"] * max(0, n["chord_index"] - 1)
         starts = plays(perf, n["midi_pitch"], t - 1e-6, t + delay + 1e-3)
@@ -245,12 +249,15 @@ def test_staccatissimo_tenuto_strong_accent(perf):
     assert attack_force(perf, s["t0"]) / force_at(perf, s["t0"] + 0.5) == pytest.approx(3.0)
 
 
-def test_grace_note_takes_time_from_the_next(perf):
+def test_acciaccatura_is_played_before_the_beat(perf):
+    """The notation score's grace note is slashed (music21's default): it takes its time
+    from what precedes it and the main note keeps its onset, slurred from the grace."""
     ev = perf.events
-    grace = ev[(ev["label"] == "B4") & (np.abs(ev["t0"] - at(44)) < 1e-6)]
-    main = event(perf, 44.07)
+    g = CFG["articulations"]["grace_duration"]
+    grace = ev[(ev["label"] == "B4") & (np.abs(ev["t0"] - (at(44) - g)) < 1e-6)]
+    main = event(perf, 44)
     assert len(grace) == 1
-    assert main["t0"] == pytest.approx(at(44) + CFG["articulations"]["grace_duration"])
+    assert main["t0"] == pytest.approx(at(44))
     assert main["direction"] == grace["direction"].iloc[0]
 
 

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+#: Help of ``--movement`` (render, notes, compare, evaluate).
+MOVEMENT_HELP = ("movement, from 1, of a file that holds several (arco notes lists them; "
+                 "default: the first)")
+
 
 def non_negative_int(text: str) -> int:
     """An integer >= 0 (seeds).

@@ -17,7 +17,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rules",
                  engine: str = "modal", parts: int | str | list[int] | None = None,
                  start_measure: int | None = None, end_measure: int | None = None,
-                 seed: int = 0, sample_rate: int = 44100, instrument: str | None = None,
+                 movement: int | None = None, seed: int = 0, sample_rate: int = 44100, instrument: str | None = None,
                  skill: int = 3, transpose_octaves: bool = False,
                  config: str | os.PathLike | dict[str, Any] | None = None,
                  db=None, models: str | os.PathLike | None = None,
@@ -36,8 +36,8 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
     parts : int, str, list of int or None
         Which parts: None the first, ``"all"`` every part (mixed), a part index or name, or
         a list of part indices.
-    start_measure, end_measure : int, optional
-        Play only these measures (inclusive).
+    start_measure, end_measure, movement : int, optional
+        Play only these measures (inclusive) of this movement (from 1; default the first).
     seed : int
         Seed of the performer's jitter and of the engine.
     sample_rate : int, Hz
@@ -80,7 +80,7 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
 
     chosen = get_method(method)
     check_methods([method], db=db, models=models, option="--method")
-    stem, notes, indices = _select(score, parts, start_measure, end_measure)
+    stem, notes, indices = _select(score, parts, start_measure, end_measure, movement)
     database = None
     if chosen.needs_db:
         from pipelines.methods.sampling import SamplingDatabase, open_database
@@ -95,17 +95,17 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
                          progress=progress, engine=engine)
 
 
-def _select(score, parts, start: int | None, end: int | None,
+def _select(score, parts, start: int | None, end: int | None, movement: int | None = None,
             ) -> tuple[str, pd.DataFrame, list[int]]:
     """The piece's name, its notes in the measures asked for, and the part indices."""
     from pipelines.score import read_score
-    from pipelines.score.select import choose_parts, select_measures
+    from pipelines.score.select import choose_parts, select_measures, select_movement
 
     if isinstance(score, str | os.PathLike):
         stem, notes = Path(score).stem, read_score(score)
     else:
         stem, notes = _stem_of(score), score
-    notes = select_measures(notes, start, end)
+    notes = select_measures(select_movement(notes, movement), start, end)
     if isinstance(parts, list):
         return stem, notes, [int(p) for p in parts]
     one = None if parts in (None, "all") else str(parts)

@@ -52,7 +52,8 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
             methods: list[str], db: str | os.PathLike | None = None,
             models: str | os.PathLike | None = None, part: str | None = None,
             all_parts: bool = False, start_measure: int | None = None,
-            end_measure: int | None = None, seed: int = 0, sample_rate: int = 44100,
+            end_measure: int | None = None, movement: int | None = None, seed: int = 0,
+            sample_rate: int = 44100,
             search_config: str | os.PathLike | None = None,
             log=None) -> dict[str, dict[str, dict[str, Any]]]:
     """Render and evaluate every score with every method; write the report.
@@ -68,8 +69,8 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
         From :data:`METHODS`.
     db, models : path-like, optional
         Gesture database and listening models (as the methods need them).
-    part, all_parts, start_measure, end_measure
-        Part and measure selection, as ``arco render``.
+    part, all_parts, start_measure, end_measure, movement
+        Part, measure and movement selection, as ``arco render``.
     seed : int
     sample_rate : int, Hz
     search_config : path-like, optional
@@ -86,7 +87,7 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
     from pipelines.perform.config import load_config
     from pipelines.reports.html import write_report
     from pipelines.score import read_score
-    from pipelines.score.select import choose_parts, select_measures
+    from pipelines.score.select import choose_parts, select_measures, select_movement
 
     say = log or (lambda *_: None)
     check_methods(methods, db=db, models=models)
@@ -99,7 +100,8 @@ def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
     results: dict[str, dict[str, dict[str, Any]]] = {m: {} for m in methods}
     media: dict[str, dict[str, dict[str, str]]] = {m: {} for m in methods}
     for score, stem in zip(scores, stems, strict=True):
-        notes = select_measures(read_score(score), start_measure, end_measure)
+        notes = select_measures(select_movement(read_score(score), movement), start_measure,
+                                end_measure)
         parts = choose_parts(notes, part, all_parts)
         for method in methods:
             say(f"{stem}: {method} ...")

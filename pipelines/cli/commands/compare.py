@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from pipelines.cli.outputs import output_dir
-from pipelines.cli.types import non_negative_int
+from pipelines.cli.types import MOVEMENT_HELP, non_negative_int, positive_int
 
 DEFAULT_METHODS = "rules,feedback,sampling,sampling-open"
 
@@ -29,6 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     which = p.add_argument_group("parts")
     which.add_argument("--part", metavar="NAME|INDEX", help="part to play (default: first)")
     which.add_argument("--all-parts", action="store_true", help="play every part and mix")
+    which.add_argument("--movement", type=positive_int, metavar="N", help=MOVEMENT_HELP)
     which.add_argument("--start-measure", type=int, metavar="M", help="first measure")
     which.add_argument("--end-measure", type=int, metavar="M", help="last measure")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
@@ -47,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     compare(args.scores, args.output, methods=methods, db=args.db, models=args.models,
             part=args.part, all_parts=args.all_parts, start_measure=args.start_measure,
-            end_measure=args.end_measure, seed=args.seed, sample_rate=args.sample_rate,
+            end_measure=args.end_measure, movement=args.movement, seed=args.seed, sample_rate=args.sample_rate,
             search_config=args.search_config, log=say)
     say(f"wrote {args.output}/index.html, results.json, results.csv")
     return 0

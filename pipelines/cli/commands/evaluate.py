@@ -8,6 +8,7 @@ import math
 import sys
 
 from data_schemas.errors import ParameterError
+from pipelines.cli.types import MOVEMENT_HELP, positive_int
 from synth.strings import INSTRUMENT_NAMES
 
 
@@ -23,6 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--actions", required=True, metavar="ACTIONS.parquet",
                    help="the actions table that was played")
     p.add_argument("--score", metavar="SCORE", help="the score (level targets per dynamic)")
+    p.add_argument("--movement", type=positive_int, metavar="N", help=MOVEMENT_HELP)
     p.add_argument("--diagnostics", metavar="DIAG.parquet",
                    help="contact diagnostics recorded by the render")
     p.add_argument("--instrument", default="violin", choices=INSTRUMENT_NAMES,
@@ -68,9 +70,9 @@ def run(args: argparse.Namespace) -> int:
         else None
     score = None
     if args.score:
-        from pipelines.score import read_score
+        from pipelines.score import read_score, select_movement
 
-        score = read_score(args.score)
+        score = select_movement(read_score(args.score), args.movement)
     result = _clean(evaluate(audio, actions, sample_rate=int(sr), diagnostics=diagnostics,
                              instrument=args.instrument, score=score))
     if args.json:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from data_schemas.errors import ParameterError
 from pipelines.cli.outputs import output_file
-from pipelines.cli.types import non_negative_int
+from pipelines.cli.types import MOVEMENT_HELP, non_negative_int, positive_int
 from pipelines.methods.registry import METHODS, check_methods, get_method
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
@@ -46,6 +46,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                        help="play every part on its own instrument and mix them")
     which.add_argument("--instrument", choices=INSTRUMENT_NAMES,
                        help="override the part's instrument (single part only)")
+    which.add_argument("--movement", type=positive_int, metavar="N", help=MOVEMENT_HELP)
     which.add_argument("--start-measure", type=int, metavar="M", help="first measure")
     which.add_argument("--end-measure", type=int, metavar="M", help="last measure")
     which.add_argument("--transpose-octaves", action="store_true",
@@ -108,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     output = render_score(args.score, method=method, engine=args.engine,
                           parts="all" if args.all_parts else args.part,
                           start_measure=args.start_measure, end_measure=args.end_measure,
-                          seed=args.seed, sample_rate=args.sample_rate,
+                          movement=args.movement, seed=args.seed, sample_rate=args.sample_rate,
                           instrument=args.instrument, skill=args.skill,
                           transpose_octaves=args.transpose_octaves, config=args.config,
                           db=args.db, models=args.models, diagnostics=bool(args.diagnostics),
