@@ -207,6 +207,7 @@ class _PartState:
     sforzandi: list[float] = field(default_factory=list)
     tempi: list[tuple[float, float, bool]] = field(default_factory=list)
     where: dict[int, tuple[float, int, float]] = field(default_factory=dict)
+    located: dict[int, tuple[int, int]] = field(default_factory=dict)  # measure, movement
 
     def report(self, raw: RawPart, kind: str, detail: str = "") -> None:
         raw.unperformed.append({"measure": self.measure, "movement": self.movement,
@@ -298,6 +299,7 @@ def _add_note(raw: RawPart, el, beat: float, measure: int, voice: int,
     if flags.get("harmonic") or any(getattr(n, "notehead", "") == "diamond" for _, n in pitched):
         pitched = _sounding(pitched, flags, raw)
     state.where[id(el)] = (beat, voice, duration)
+    state.located[id(el)] = (measure, state.movement)
     for k, (ps, n) in enumerate(pitched):
         midi = int(round(ps))
         tie = n.tie.type if n.tie is not None else (el.tie.type if el.tie is not None else None)
@@ -377,7 +379,12 @@ def _add_spanners(raw: RawPart, part, state: _PartState) -> None:
     for sp in part.spanners:
         classes = sp.classSet
         elements = [e for e in sp.getSpannedElements() if id(e) in where]
-        if not elements:
+        if not elements:  # over rests only: nothing is played, a reported kind is listed
+            if is_reported(kind := mark_kind("spanner", sp)):
+                spanned = sp.getSpannedElements()
+                state.measure = int(getattr(spanned[0], "measureNumber", None) or 0) \
+                    if spanned else 0
+                state.report(raw, kind, _describe(sp))
             continue
         first, last = where[id(elements[0])], where[id(elements[-1])]
         if "Slur" in classes:
@@ -392,7 +399,8 @@ def _add_spanners(raw: RawPart, part, state: _PartState) -> None:
         elif "TrillExtension" in classes:
             _wavy_line(raw, elements, where)
         elif is_reported(kind := mark_kind("spanner", sp)):
-            state.measure = int(getattr(elements[0], "measureNumber", None) or 0)
+            state.measure, state.movement = state.located.get(
+                id(elements[0]), (state.measure, state.movement))
             state.report(raw, kind, _describe(sp))
 
 

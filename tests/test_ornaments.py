@@ -1,0 +1,218 @@
+"""Ornaments, grace notes, harmonics, movements and unperformed marks: read and performed.
+
+The expected pitches come from the score as written (tests/_ornament_score.py) and music
+theory (a trill on C5 in C major alternates with D5), not from the code under test; the
+finger's pitch is read back from the actions table through the open strings' pitches.
+"""
+
+from __future__ import annotations
+
+import collections
+import glob
+import os
+import warnings
+
+import numpy as np
+import pytest
+from _ornament_score import write
+
+from data_schemas.errors import ParameterError
+from data_schemas.instruments import instrument_facts
+from pipelines.perform.config import load_config
+from pipelines.perform.rules import perform_part
+from pipelines.score import list_movements, read_score_report, select_movement
+from pipelines.score.marks import PERFORMED, SILENT, is_reported
+from pipelines.score.text import classify
+
+QUARTETS = sorted(glob.glob(os.path.join(os.path.dirname(__file__), "..", "..", "shared",
+                                         "data", "openscore-quartets", "*.mxl")))
+if not QUARTETS:
+    QUARTETS = sorted(glob.glob("/work/shared/data/openscore-quartets/*.mxl"))
+
+
+@pytest.fixture(scope="module")
+def reading(tmp_path_factory):
+    path = write(tmp_path_factory.mktemp("orn") / "ornaments.musicxml")
+    return read_score_report(path)
+
+
+@pytest.fixture(scope="module")
+def plain_config():
+    cfg = load_config()
+    cfg["vibrato"]["enabled"] = False
+    cfg["intonation"]["sigma"] = 0.0
+    cfg["intonation"]["semitone_step"] = 0.0
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def finger(reading, plain_config):
+    """(time, sounding MIDI pitch) of every bowed frame of the first movement."""
+    notes = select_movement(reading[0], 1)
+    perf = perform_part(notes, plain_config)
+    a = perf.actions[perf.actions["bow_force"] > 0]
+    opens = np.asarray(instrument_facts("violin").open_strings)[a["string"].to_numpy(int)]
+    pitch = opens - 12.0 * np.log2(1.0 - a["finger_ratio"].to_numpy(np.float64))
+    return a["time"].to_numpy(), pitch, perf
+
+
+def _sequence(finger, t0: float, t1: float) -> tuple[list[int], list[float]]:
+    """Distinct successive pitches (rounded) in [t0, t1) and when each starts."""
+    t, pitch, _ = finger
+    m = (t >= t0) & (t < t1)
+    p = np.round(pitch[m]).astype(int)
+    starts = np.r_[0, np.flatnonzero(np.diff(p)) + 1]
+    return [int(p[i]) for i in starts], [float(t[m][i]) for i in starts]
+
+
+def test_marks_are_read(reading):
+    notes, _ = reading
+    first = notes[notes["movement"] == 1].set_index("onset_beats")
+    assert first.loc[0.0, "ornament"] == "trill" and first.loc[0.0, "ornament_upper"] == 2
+    assert first.loc[4.0, "ornament"] == "mordent" and first.loc[4.0, "ornament_lower"] == 1
+    assert first.loc[6.0, "ornament"] == "inverted_mordent"
+    assert first.loc[6.0, "ornament_upper"] == 1  # E5 -> F5
+    assert first.loc[8.0, "ornament"] == "turn"
+    assert (first.loc[8.0, "ornament_upper"], first.loc[8.0, "ornament_lower"]) == (2, 2)
+    graces = notes[notes["grace"]].set_index("onset_beats")["grace_type"]
+    assert graces.to_dict() == {10.0: "acciaccatura", 12.0: "appoggiatura"}
+    natural = first.loc[14.0]
+    assert natural["harmonic_type"] == "natural" and natural["midi_pitch"] == 74
+    artificial = first.loc[16.0]  # D4 stopped, G4 touched: two octaves above D4
+    assert artificial["harmonic_type"] == "artificial" and artificial["midi_pitch"] == 86
+    assert artificial["chord_size"] == 1
+    second = notes[notes["movement"] == 2]
+    trill = second[second["ornament"] == "trill"].iloc[0]
+    assert trill["midi_pitch"] == 78 and trill["ornament_upper"] == 1  # F#5 -> G5 in D
+
+
+def test_movements_are_listed_and_selected(reading):
+    notes, _ = reading
+    table = list_movements(notes)
+    assert table.to_dict("records") == [
+        {"movement": 1, "title": "Allegro", "first_measure": 1, "last_measure": 5},
+        {"movement": 2, "title": "Adagio", "first_measure": 1, "last_measure": 2}]
+    second = select_movement(notes, 2)
+    assert second["midi_pitch"].tolist() == [78, 69]
+    assert second["onset"].min() == 0.0 and second["onset_beats"].min() == 0.0
+    with pytest.raises(ParameterError, match="movement"):
+        select_movement(notes, 3)
+
+
+def test_unperformed_marks_are_reported(reading):
+    _, unperformed = reading
+    found = set(zip(unperformed["measure"], unperformed["kind"], unperformed["detail"],
+                    strict=True))
+    assert (5, "text", "dolce") in found
+    assert any(k == "expression:Schleifer" for _, k, _ in found)
+    assert len(unperformed) == 2
+
+
+def test_trill_alternates_with_the_upper_note_at_the_tempo_rate(finger, plain_config):
+    pitches, starts = _sequence(finger, 0.0, 3.7)
+    assert set(pitches) == {72, 74}
+    assert pitches[0] == 74  # starts on the upper note (the shipped trill_start)
+    rate = (len(pitches) - 1) / (starts[-1] - starts[0])
+    assert rate == pytest.approx(8.0, rel=0.05)  # 8 notes per quarter at 60 / min
+    end, _ = _sequence(finger, 3.7, 4.0)
+    assert end[-2:] == [71, 72]  # nachschlag: lower auxiliary, main note
+
+
+def test_mordents_and_turns_are_figures_at_the_start(finger):
+    assert _sequence(finger, 4.002, 5.9)[0] == [72, 71, 72]
+    assert _sequence(finger, 6.002, 7.9)[0] == [76, 77, 76]
+    pitches, starts = _sequence(finger, 8.002, 9.5)
+    assert pitches == [81, 79, 77, 79]
+    assert starts[-1] - starts[0] < 0.25  # quick notes, then the main note held
+
+
+def test_grace_notes_on_time(finger, plain_config):
+    _, _, perf = finger
+    ev = perf.events
+    g = plain_config["articulations"]["grace_duration"]
+    acc = ev[ev["label"] == "B4"].iloc[0]
+    assert acc["t0"] == pytest.approx(10.0 - g)
+    assert ev[np.isclose(ev["t0"], 10.0)]["label"].tolist() == ["A4"]
+    app = ev[ev["label"] == "B4"].iloc[1]
+    assert app["t0"] == pytest.approx(12.0)
+    main = ev[(ev["label"] == "A4") & (ev["t0"] > 12.0)].iloc[0]
+    assert main["t0"] == pytest.approx(13.0)  # half of the half note
+
+
+def test_trill_is_heard(reading, plain_config):
+    """Pitch-track the render: a trilled C5 alternates C5 and D5 about 8 times a second."""
+    import librosa
+
+    from synth import render_actions
+
+    notes = select_movement(reading[0], 1)
+    notes = notes[notes["measure"] == 1]
+    perf = perform_part(notes, plain_config)
+    audio = render_actions(perf.actions, instrument="violin", seed=0)
+    f0, voiced, _ = librosa.pyin(audio[: int(3.5 * 44100)].astype(np.float64), fmin=400,
+                                 fmax=700, sr=44100, frame_length=2048, hop_length=128)
+    hop = 128 / 44100
+    keep = voiced & np.isfinite(f0)
+    assert keep.mean() > 0.9
+    midi = librosa.hz_to_midi(f0[keep])
+    assert np.percentile(midi, 10) == pytest.approx(72.0, abs=0.3)  # C5
+    assert np.percentile(midi, 90) == pytest.approx(74.0, abs=0.3)  # D5
+    side = np.sign(midi - 73.0)
+    crossings = np.flatnonzero(side[1:] != side[:-1])
+    notes_per_second = (crossings.size - 1) / ((crossings[-1] - crossings[0]) * hop)
+    assert notes_per_second == pytest.approx(8.0, rel=0.1)
+
+
+def _walk_kinds(path: str) -> collections.Counter:
+    """Every mark music21 yields, counted by kind, walking the parsed score independently."""
+    import music21
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        score = music21.converter.parse(path, format="musicxml", forceSource=True)
+    kinds: collections.Counter = collections.Counter()
+    for part in score.parts:
+        for el in part.recurse():
+            if isinstance(el, music21.note.GeneralNote):
+                kinds.update(f"articulation:{type(a).__name__}" for a in el.articulations)
+                kinds.update(f"expression:{type(e).__name__}" for e in el.expressions)
+            elif isinstance(el, music21.expressions.TextExpression):
+                if not classify(el.content or ""):
+                    kinds["text?"] += 1
+            elif not isinstance(el, music21.spanner.Spanner):
+                kinds[f"element:{type(el).__name__}"] += 1
+        kinds.update(f"spanner:{type(sp).__name__}" for sp in part.spanners)
+    return kinds
+
+
+_SUBSET = ("Haydn-Joseph-String-Quartet-in-B-flat", "Debussy", "Beethoven-Ludwig-van-String-"
+           "Quartet-No.1-Op.18")
+
+
+def _quartets() -> list[str]:
+    if os.environ.get("ARCO_ALL_QUARTETS"):
+        return QUARTETS
+    return [q for q in QUARTETS if any(os.path.basename(q).startswith(s) for s in _SUBSET)]
+
+
+@pytest.mark.skipif(not QUARTETS, reason="the shared OpenScore quartets are not here")
+@pytest.mark.parametrize("path", _quartets(), ids=os.path.basename)
+def test_every_mark_is_performed_or_reported(path):
+    """Each kind music21 yields is performed, silent, or every occurrence is reported.
+
+    Three quartets by default (about a minute on two busy cores); ARCO_ALL_QUARTETS=1 reads
+    all 18.
+    """
+    kinds = _walk_kinds(path)
+    _, unperformed = read_score_report(path)
+    reported = collections.Counter(unperformed["kind"])
+    for kind, count in kinds.items():
+        if kind == "text?":  # words no rule understands: reported unless they set a tempo
+            assert reported["text"] <= count
+            continue
+        if kind in PERFORMED or kind == "element:Dynamic":
+            continue
+        if not is_reported(kind):
+            assert kind in SILENT or kind.startswith("element:"), kind
+            continue
+        assert reported[kind] == count, (kind, reported[kind], count)
