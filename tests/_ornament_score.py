@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from music21 import articulations, expressions, key, meter, note, stream, tempo, chord
+from music21 import articulations, chord, expressions, key, meter, note, stream, tempo
 from music21 import instrument as m21instrument
 
 

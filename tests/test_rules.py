@@ -79,8 +79,9 @@ def plays(perf, pitch: int, a: float, b: float) -> bool:
 
 def test_every_note_starts_at_its_score_onset(notes, perf):
     """Each note (tie continuations aside) sounds from its score onset: at once, after the
-    appoggiaturas before it, a grace_duration per acciaccatura before it, or after the lower notes of a rolled chord (the notes table says
-    which; the performance's own event times are not used)."""
+    appoggiaturas before it (acciaccaturas start a grace_duration each before it), or after
+    the lower notes of a rolled chord (the notes table says which; the performance's own
+    event times are not used)."""
     validate_actions(perf.actions)
     art = CFG["articulations"]
     late = []

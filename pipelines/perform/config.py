@@ -98,7 +98,8 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
     "skill": {"pitch_sigma": 12.0, "onset_sigma": 1.0},
     "vibrato": {"*": 20.0, "extent": 100.0, "onset_share": 1.0},
     "ornaments": {"trill_subdivision": 32.0, "trill_min_rate": 30.0, "trill_max_rate": 30.0,
-                  "ornament_note": 0.5, "appoggiatura_share": 0.9},
+                  "ornament_note": 0.5, "appoggiatura_share": 0.9, "shift_interval": 24.0,
+                  "portamento_time": 0.5},
 }
 
 
@@ -218,7 +219,7 @@ def _validate_expression(config: dict[str, Any], source: str) -> None:
 def _validate_ornaments(config: dict[str, Any], source: str) -> None:
     orn = config["ornaments"]
     for key in ("trill_subdivision", "trill_min_rate", "trill_max_rate", "ornament_note",
-                "appoggiatura_share"):
+                "appoggiatura_share", "shift_interval", "portamento_time"):
         _positive(config, "ornaments", key, source)
     if orn["trill_min_rate"] > orn["trill_max_rate"]:
         raise ParameterError(f"{source}: ornaments.trill_min_rate={orn['trill_min_rate']!r} "

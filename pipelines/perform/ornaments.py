@@ -17,6 +17,9 @@ the vibrato where the actions table is written. Settings are ``[ornaments]`` in
   note's start, **turn** (upper, main, lower, main) and **inverted turn** (lower, main,
   upper, main) at its start, delayed turns in its last part; each ornament note lasts
   ``ornament_note`` seconds, at most a quarter of the note between them.
+- **shifts** (:func:`assign_portamenti`): a slurred note on the same string as the one
+  before it and at least ``shift_interval`` semitones away starts with a glide of the finger
+  from the previous pitch over ``portamento_time`` seconds (a short, audible portamento).
 - **grace notes** (:func:`time_graces`): an acciaccatura (slashed) is played just before
   the beat, ``[articulations] grace_duration`` seconds each, taking its time from what
   precedes it; an appoggiatura (unslashed) is played on the beat and takes
@@ -34,8 +37,11 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Ornament:
-    """A finger figure: from ``times[k]`` (s) the finger plays ``steps[k]`` semitones above
-    the main note (negative: below); after ``end`` (s) it is back on the main note."""
+    """A finger figure inside one note.
+
+    From ``times[k]`` (s) the finger plays ``steps[k]`` semitones above the main note
+    (negative: below); after ``end`` (s) it is back on the main note.
+    """
 
     kind: str
     times: tuple[float, ...]
@@ -138,6 +144,28 @@ def assign_ornaments(events: list, cols: dict[str, np.ndarray], config: dict[str
                             config)
         if kind == "trill":
             e.vibrato = None
+
+
+def assign_portamenti(events: list, config: dict[str, Any]) -> None:
+    """Give slurred shifts on one string a glide from the previous pitch (``e.ornament``).
+
+    The glide is a ramp of steps one control frame apart, so the frames interpolate it.
+    """
+    orn = config["ornaments"]
+    dt = config["frames"]["interval"]
+    for prev, e in zip(events, events[1:], strict=False):
+        if e.ornament is not None or e.pizz or prev.pizz or not e.cont:
+            continue
+        if len(e.strings) != 1 or len(prev.strings) != 1 or e.strings != prev.strings:
+            continue
+        jump = prev.semitones[0] - e.semitones[0]
+        if abs(jump) < orn["shift_interval"] or min(prev.semitones[0], e.semitones[0]) <= 0:
+            continue
+        glide = min(orn["portamento_time"], 0.25 * (e.played_end - e.t0))
+        n = max(int(round(glide / dt)), 1)
+        times = tuple(e.t0 + k * glide / n for k in range(n))
+        steps = tuple(jump * (1.0 - k / n) for k in range(n))
+        e.ornament = Ornament("portamento", times, steps, e.t0 + glide)
 
 
 def _semitones(value: object, default: float) -> float:

@@ -28,7 +28,7 @@ from data_schemas.instruments import instrument_facts
 from pipelines.perform.events import Event, Performance
 from pipelines.perform.expression import assign_vibrato, intonation_cents
 from pipelines.perform.instruments import choose_strings, fit_range
-from pipelines.perform.ornaments import assign_ornaments, time_graces
+from pipelines.perform.ornaments import assign_ornaments, assign_portamenti, time_graces
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
 _MIN_DURATION = 0.005  # s
@@ -152,6 +152,7 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     _articulate(events, cols, config)
     assign_vibrato(events, config, rng)
     assign_ornaments(events, cols, config)
+    assign_portamenti(events, config)
     return events
 
 

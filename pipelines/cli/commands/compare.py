@@ -48,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     compare(args.scores, args.output, methods=methods, db=args.db, models=args.models,
             part=args.part, all_parts=args.all_parts, start_measure=args.start_measure,
-            end_measure=args.end_measure, movement=args.movement, seed=args.seed, sample_rate=args.sample_rate,
+            end_measure=args.end_measure, movement=args.movement, seed=args.seed,
+            sample_rate=args.sample_rate,
             search_config=args.search_config, log=say)
     say(f"wrote {args.output}/index.html, results.json, results.csv")
     return 0
