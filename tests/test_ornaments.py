@@ -255,3 +255,33 @@ def _contour(perf) -> tuple[np.ndarray, np.ndarray]:
     opens = np.asarray(instrument_facts("violin").open_strings)[a["string"].to_numpy(int)]
     return a["time"].to_numpy(), opens - 12.0 * np.log2(1.0 - a["finger_ratio"].to_numpy(
         np.float64))
+
+
+def test_arco_notes_lists_movements_and_warnings(tmp_path, capsys):
+    import pipelines.cli.main as cli
+    from data_schemas.notes import read_notes
+
+    path = write(tmp_path / "ornaments.musicxml")
+    assert cli.main(["notes", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "2 movement(s)" in out and "1 'Allegro': measures 1-5" in out
+    assert "2 'Adagio': measures 1-2" in out
+    assert "warnings: 2 mark(s) read and not performed" in out
+    assert "movement 1: text 'dolce' not performed (m. 5)" in out
+    assert "expression:Schleifer 'schleifer' not performed (m. 5)" in out
+    assert cli.main(["notes", str(path), "--movement", "2", "-o",
+                     str(tmp_path / "n.parquet")]) == 0
+    assert "warnings: none" in capsys.readouterr().out
+    table = read_notes(tmp_path / "n.parquet")
+    assert table["midi_pitch"].tolist() == [78, 69] and table["ornament"].iloc[0] == "trill"
+    assert cli.main(["notes", str(path), "--movement", "3"]) == 2
+    assert "movement(s) 1, 2" in capsys.readouterr().err
+
+
+def test_render_plays_the_chosen_movement(tmp_path):
+    from pipelines.methods.render import render_score
+
+    path = write(tmp_path / "ornaments.musicxml")
+    out = render_score(path, movement=2, sample_rate=44100)
+    assert out.parts[0].events["label"].tolist() == ["F#5", "A4"]
+    assert out.audio.size / 44100 == pytest.approx(8.0, abs=1.5)
