@@ -181,7 +181,8 @@ def _walk_kinds(score) -> collections.Counter:
     return kinds
 
 
-_SUBSET = ("Haydn-Joseph-String-Quartet-in-B-flat", "Debussy", "Beethoven-Ludwig-van-String-"
+_SUBSET = ("Haydn-Joseph-String-Quartet-in-B-flat", "Mozart-Wolfgang-Amadeus-String-Quartet-No.14",
+           "Beethoven-Ludwig-van-String-"
            "Quartet-No.1-Op.18")
 
 
