@@ -286,3 +286,14 @@ def test_render_plays_the_chosen_movement(tmp_path):
     out = render_score(path, movement=2, sample_rate=44100)
     assert out.parts[0].events["label"].tolist() == ["F#5", "A4"]
     assert out.audio.size / 44100 == pytest.approx(8.0, abs=1.5)
+
+
+def test_trill_start_and_nachschlag_follow_the_settings(plain_config):
+    """A 1 s trill at 60 / min: 8 notes, upper or main start, nachschlag unless written."""
+    from pipelines.perform.ornaments import figure
+
+    cfg = {**plain_config, "ornaments": {**plain_config["ornaments"], "trill_start": "main"}}
+    main_first = figure("trill", 0.0, 1.0, 2, 1, 60.0, cfg)
+    assert main_first.steps[:3] == (0.0, 2.0, 0.0) and main_first.steps[-2:] == (-1.0, 0.0)
+    upper_first = figure("trill", 0.0, 1.0, 2, 1, 60.0, plain_config, nachschlag=False)
+    assert upper_first.steps == (2.0, 0.0) * 4

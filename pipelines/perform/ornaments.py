@@ -12,7 +12,8 @@ the vibrato where the actions table is written. Settings are ``[ornaments]`` in
   ``trill_min_rate`` .. ``trill_max_rate`` notes per second (6-12); it starts on the upper
   note (``trill_start = "upper"``, the baroque and classical habit) or on the main note
   (``"main"``), ends on the main note, with a nachschlag (lower auxiliary, main) when
-  ``trill_nachschlag`` and it has at least six notes. A trilled note has no vibrato.
+  ``trill_nachschlag`` and it has at least six notes (none added when grace notes follow:
+  the score writes its own). A trilled note has no vibrato.
 - **mordent** (main, lower, main) and **inverted mordent** (main, upper, main) at the
   note's start, **turn** (upper, main, lower, main) and **inverted turn** (lower, main,
   upper, main) at its start, delayed turns in its last part; each ornament note lasts
@@ -87,8 +88,11 @@ def trill_rate(tempo: float, config: dict[str, Any]) -> float:
 
 
 def figure(kind: str, t0: float, t1: float, upper: float, lower: float, tempo: float,
-           config: dict[str, Any]) -> Ornament:
+           config: dict[str, Any], *, nachschlag: bool | None = None) -> Ornament:
     """The steps of ornament ``kind`` on a note played from ``t0`` to ``t1`` (s).
+
+    ``nachschlag`` overrides ``[ornaments] trill_nachschlag`` (no added one when the
+    score writes it as grace notes).
 
     Examples
     --------
@@ -108,7 +112,7 @@ def figure(kind: str, t0: float, t1: float, upper: float, lower: float, tempo: f
         steps = [upper if (k + first) % 2 == 0 else 0.0 for k in range(n)]
         if steps[-1] != 0.0:
             steps = steps[:-1] if n > 2 else [*steps, 0.0]
-        if orn["trill_nachschlag"] and len(steps) >= 6:
+        if (orn["trill_nachschlag"] if nachschlag is None else nachschlag) and len(steps) >= 6:
             steps[-2:] = [-lower, 0.0]
         dt = length / len(steps)
         return Ornament(kind, tuple(t0 + k * dt for k in range(len(steps))),
@@ -131,7 +135,7 @@ def assign_ornaments(events: list, cols: dict[str, np.ndarray], config: dict[str
     """
     if "ornament" not in cols:
         return
-    for e in events:
+    for k, e in enumerate(events):
         if e.pizz:
             continue
         kinds = [(r, cols["ornament"][r]) for r in e.rows if isinstance(cols["ornament"][r], str)]
@@ -140,8 +144,9 @@ def assign_ornaments(events: list, cols: dict[str, np.ndarray], config: dict[str
         row, kind = kinds[0]
         upper = _semitones(cols["ornament_upper"][row], 2.0)
         lower = _semitones(cols["ornament_lower"][row], 1.0)
+        written = k + 1 < len(events) and bool(cols["grace"][events[k + 1].rows[0]])
         e.ornament = figure(kind, e.t0, e.played_end, upper, lower, float(cols["tempo"][row]),
-                            config)
+                            config, nachschlag=False if written else None)
         if kind == "trill":
             e.vibrato = None
 
