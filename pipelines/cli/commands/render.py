@@ -9,7 +9,7 @@ from pathlib import Path
 
 from data_schemas.errors import ParameterError
 from pipelines.cli.outputs import output_file
-from pipelines.cli.types import non_negative_int
+from pipelines.cli.types import add_limit_options, non_negative_int
 from pipelines.methods.registry import METHODS, check_methods, get_method
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
@@ -56,6 +56,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     play.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
     play.add_argument("--config", metavar="RULES.toml",
                       help="rules settings merged over the shipped defaults")
+    add_limit_options(play, notes=True)
     out = p.add_argument_group("output")
     out.add_argument("-o", "--output", metavar="OUT.wav", help="audio file to write")
     out.add_argument("--actions", metavar="OUT.parquet",
@@ -112,7 +113,8 @@ def run(args: argparse.Namespace) -> int:
                           instrument=args.instrument, skill=args.skill,
                           transpose_octaves=args.transpose_octaves, config=args.config,
                           db=args.db, models=args.models, diagnostics=bool(args.diagnostics),
-                          progress=False if args.quiet else None)
+                          progress=False if args.quiet else None,
+                          max_duration=args.max_duration, max_notes=args.max_notes)
     for part in output.parts:
         for warning in part.warnings:
             say(f"arco render: warning: {warning}")
