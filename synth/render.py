@@ -148,9 +148,12 @@ def check_length(actions: pd.DataFrame, tail: float, source: str = "<actions>",
     """
     from data_schemas.limits import check_duration
 
-    if len(actions) and "time" in actions:
-        check_duration(float(np.max(actions["time"].to_numpy(np.float64))) + float(tail),
-                       source, max_duration)
+    if not len(actions) or "time" not in actions:
+        return
+    times = pd.to_numeric(actions["time"], errors="coerce").to_numpy(np.float64)
+    times = times[np.isfinite(times)]  # text, NaN and inf are the table check's to report
+    if times.size:
+        check_duration(float(times.max()) + float(tail), source, max_duration)
 
 
 def check_audio(audio: np.ndarray, ceiling: float = AUDIO_CEILING, *,
