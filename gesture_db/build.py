@@ -29,7 +29,7 @@ from data_schemas.gesture_db import (
     read_manifest,
     write_manifest,
 )
-from data_schemas.io import write_table
+from data_schemas.io import remove_stale_temps, write_table
 from data_schemas.workers import process_pool
 from gesture_db.extract import extract_take
 from gesture_db.features import fit_group_model
@@ -174,6 +174,7 @@ def _build(db: Path, previous: dict | None, kept: dict[str, dict],
            on_source_done: Callable[[str], None] | None) -> dict:
     """Process the new sources, fit the models and commit the next generation."""
     db.mkdir(parents=True, exist_ok=True)
+    remove_stale_temps(db, recursive=True)  # left by a killed build
     results, pending = _resume(db, todo)
     resumed = len(results)
     bar = tqdm(total=len(pending), desc="build-db", unit="source", disable=not progress)

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
-from pipelines.cli.outputs import output_file
+from pipelines.cli.outputs import output_file, removed_on_failure
 from pipelines.cli.types import add_limit_options, non_negative_int
 from pipelines.methods.registry import METHODS, check_methods, get_method
 from synth.engines import DEFAULT_ENGINE, engine_names
@@ -93,6 +93,10 @@ def _check(args: argparse.Namespace, method: str) -> None:
                              "or --plot")
     if args.output and Path(args.output).suffix.lower() not in (".wav", ".flac"):
         raise ParameterError(f"-o {args.output}: use a .wav (or .flac) file")
+    for option in ("actions", "diagnostics"):
+        value = getattr(args, option)
+        if value and Path(value).suffix.lower() not in (".parquet", ".pq", ".csv"):
+            raise ParameterError(f"--{option} {value}: use a .parquet (or .csv) file")
     for option in ("output", "actions", "diagnostics", "plot"):
         if getattr(args, option):
             output_file(getattr(args, option), "-o" if option == "output" else f"--{option}")
@@ -118,7 +122,9 @@ def run(args: argparse.Namespace) -> int:
     for part in output.parts:
         for warning in part.warnings:
             say(f"arco render: warning: {warning}")
-    _write(args, output, method, say)
+    targets = [getattr(args, o) for o in ("output", "actions", "diagnostics", "plot")]
+    with removed_on_failure(*{Path(t).parent for t in targets if t}, recursive=False):
+        _write(args, output, method, say)  # all of the outputs or none of them
     return 0
 
 
