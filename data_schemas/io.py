@@ -180,7 +180,22 @@ def read_table(path: str | os.PathLike, spec: TableSpec) -> pa.Table:
                               source=str(path))
     except (pa.ArrowInvalid, OSError) as exc:
         raise SchemaError(f"cannot read: {str(exc).splitlines()[0]}", source=str(path)) from None
+    column_names(table, str(path))
     return spec.conform(table, source=str(path))
+
+
+def column_names(table: pa.Table, source: str) -> list[str]:
+    """A table's column names, or a SchemaError when one is not UTF-8 text.
+
+    Examples
+    --------
+    >>> column_names(pa.table({"time": [0.0]}), "a.csv")
+    ['time']
+    """
+    try:
+        return table.column_names
+    except UnicodeDecodeError:
+        raise SchemaError("a column name is not UTF-8 text", source=source) from None
 
 
 def read_frame(path: str | os.PathLike, spec: TableSpec) -> pd.DataFrame:

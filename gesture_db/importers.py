@@ -47,7 +47,7 @@ import pyarrow.parquet as pq
 
 from data_schemas.annotation import check_within_take, read_annotation
 from data_schemas.errors import ArcoError, SchemaError
-from data_schemas.io import metadata_text
+from data_schemas.io import column_names, metadata_text
 from data_schemas.recording import (
     DEFAULT_INSTRUMENT,
     RECORDING,
@@ -238,7 +238,7 @@ def _read_any(path: Path):
             table = pq.read_table(path)
     except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
         raise SchemaError(f"cannot read: {str(exc).splitlines()[0]}", source=str(path)) from None
-    unique_columns(table.column_names, str(path))
+    unique_columns(column_names(table, str(path)), str(path))
     return table
 
 
@@ -262,8 +262,9 @@ def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame 
         if name in columns:
             col = columns[name]
             if col not in raw:
-                raise SchemaError(f"mapped column '{col}' not in the export (has "
-                                  f"{list(raw.columns)})", source=str(data_path), column=name)
+                raise SchemaError(f"mapped column '{col}' not in the export {data_path} "
+                                  f"(has {list(raw.columns)})", source=str(mapping),
+                                  column=name)
             frame[name] = _numbers(raw[col], data_path, col) * float(scale.get(name, 1.0))
         elif name in raw:
             frame[name] = _numbers(raw[name], data_path, name) * float(scale.get(name, 1.0))

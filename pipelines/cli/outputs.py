@@ -98,8 +98,12 @@ def _listing(folder: Path, recursive: bool) -> set[Path]:
 
 
 @contextmanager
-def removed_on_failure(*folders: str | os.PathLike, recursive: bool = True) -> Iterator[None]:
+def removed_on_failure(*folders: str | os.PathLike, recursive: bool = True,
+                       errors: type[BaseException] | tuple = BaseException) -> Iterator[None]:
     """On an error in the ``with`` block, delete the files it created in ``folders``.
+
+    ``errors`` limits which exceptions clean up (e.g. only bad input, so that an
+    interrupted build keeps what it can resume from).
 
     Files that were there before stay (a failed run leaves no partial output set, and
     never deletes what it did not make); folders it created and left empty go too.
@@ -123,7 +127,7 @@ def removed_on_failure(*folders: str | os.PathLike, recursive: bool = True) -> I
     missing = [p for p in paths if not p.exists()]
     try:
         yield
-    except BaseException:
+    except errors:
         for folder, old in before.items():
             for f in _listing(folder, recursive) - old:
                 f.unlink(missing_ok=True)
