@@ -151,3 +151,11 @@ def test_build_db_actions_spanning_1e9(tmp_path, capsys):
     path = _actions(tmp_path / "played.csv", 1e9)
     err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
     assert str(path) in err and "1e+09 s" in err
+
+
+def test_build_db_empty_actions_table_names_the_file(tmp_path, capsys):
+    path = tmp_path / "played.csv"
+    path.write_text("time,string,finger_ratio,bow_force,bow_velocity,beta,bow_position,pluck\n")
+    err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
+    assert f"{path}: the actions table is empty" in err
+    assert not (tmp_path / "db").exists()
