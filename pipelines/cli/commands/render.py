@@ -93,13 +93,13 @@ def _check(args: argparse.Namespace, method: str) -> None:
                              "or --plot")
     if args.output and Path(args.output).suffix.lower() not in (".wav", ".flac"):
         raise ParameterError(f"-o {args.output}: use a .wav (or .flac) file")
+    for option in ("output", "actions", "diagnostics", "plot"):
+        if getattr(args, option):
+            output_file(getattr(args, option), "-o" if option == "output" else f"--{option}")
     for option in ("actions", "diagnostics"):
         value = getattr(args, option)
         if value and Path(value).suffix.lower() not in (".parquet", ".pq", ".csv"):
             raise ParameterError(f"--{option} {value}: use a .parquet (or .csv) file")
-    for option in ("output", "actions", "diagnostics", "plot"):
-        if getattr(args, option):
-            output_file(getattr(args, option), "-o" if option == "output" else f"--{option}")
     check_methods([method], db=args.db, models=args.models, option="--method")
 
 
