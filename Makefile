@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 NPROC := $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: demo test bench lint venv clean stk peers
+.PHONY: demo test fuzz bench lint venv clean stk peers
 
 venv: $(STAMP)
 
@@ -21,6 +21,12 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -n $(NPROC) --dist loadfile
+
+# Many more fresh random mutations of every reader than make test's few (tests/test_fuzz.py).
+FUZZ_EXAMPLES ?= 300
+fuzz: $(STAMP)
+	ARCO_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) ARCO_FUZZ_RANDOM=1 $(BIN)/python -m pytest -q \
+	  -n $(NPROC) tests/test_fuzz.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -40,14 +40,86 @@ def atomic_path(path: str | os.PathLike):
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    remove_stale_temps(path.parent, path.name)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp",
+                               dir=path.parent)
     os.close(fd)
     try:
         yield Path(tmp)
+        if Path(tmp).exists():
+            os.chmod(tmp, 0o666 & ~current_umask())  # mkstemp makes 0600; follow the umask
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def current_umask() -> int:
+    """The process's file-creation mask (read without changing it for long).
+
+    Examples
+    --------
+    >>> 0 <= current_umask() <= 0o777
+    True
+    """
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _writer_alive(name: str) -> bool:
+    """Whether the process that made temp file ``.NAME.PID.XXXX.tmp`` still runs."""
+    parts = name.split(".")
+    pid = parts[-3] if len(parts) >= 5 else ""
+    if not pid.isdigit():
+        return False  # an older run's file (no pid in the name)
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale_temps(folder: str | os.PathLike, name: str | None = None, *,
+                       recursive: bool = False) -> int:
+    """Delete hidden ``.NAME.*.tmp`` files that killed writes left in ``folder``.
+
+    Files of a writer that still runs are kept.
+
+    Parameters
+    ----------
+    folder : path-like
+    name : str, optional
+        Only the temp files of this target file name.
+    recursive : bool
+        Also in sub-folders.
+
+    Returns
+    -------
+    int
+        How many files were removed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> _ = (folder / ".out.wav.999999999.abcd.tmp").write_bytes(b"x")
+    >>> remove_stale_temps(folder), list(folder.iterdir())
+    (1, [])
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        return 0
+    pattern = f".{name}.*.tmp" if name else ".*.tmp"
+    found = folder.rglob(pattern) if recursive else folder.glob(pattern)
+    removed = 0
+    for f in found:
+        if f.is_file() and not _writer_alive(f.name):
+            f.unlink(missing_ok=True)
+            removed += 1
+    return removed
 
 
 def to_arrow(table: TableLike) -> pa.Table:
@@ -108,7 +180,22 @@ def read_table(path: str | os.PathLike, spec: TableSpec) -> pa.Table:
                               source=str(path))
     except (pa.ArrowInvalid, OSError) as exc:
         raise SchemaError(f"cannot read: {str(exc).splitlines()[0]}", source=str(path)) from None
+    column_names(table, str(path))
     return spec.conform(table, source=str(path))
+
+
+def column_names(table: pa.Table, source: str) -> list[str]:
+    """A table's column names, or a SchemaError when one is not UTF-8 text.
+
+    Examples
+    --------
+    >>> column_names(pa.table({"time": [0.0]}), "a.csv")
+    ['time']
+    """
+    try:
+        return table.column_names
+    except UnicodeDecodeError:
+        raise SchemaError("a column name is not UTF-8 text", source=source) from None
 
 
 def read_frame(path: str | os.PathLike, spec: TableSpec) -> pd.DataFrame:

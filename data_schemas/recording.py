@@ -56,6 +56,28 @@ def _steady_frame_rate(table: pa.Table, source: str) -> None:
                               row=int(rows[0]))
 
 
+def _bounded_takes(table: pa.Table, source: str) -> None:
+    """No take longer than, or with a frame step over, the limits of ``limits.toml``."""
+    from data_schemas.limits import LIMITS
+
+    times = table.column("time").to_numpy(zero_copy_only=False).astype(np.float64)
+    keys = table.column("recording_id").to_numpy(zero_copy_only=False)
+    for key in np.unique(keys):
+        rows = np.flatnonzero(keys == key)
+        last = int(rows[np.argmax(times[rows])])
+        if not times[last] <= LIMITS.max_take_duration:
+            raise SchemaError(f"take {key!r}: frame time {times[last]:.6g} s is over the "
+                              f"limit of {LIMITS.max_take_duration:g} s for one take",
+                              source=source, column="time", row=last)
+        if rows.size > 1:
+            steps = np.diff(times[rows])
+            k = int(np.argmax(steps))
+            if steps[k] > LIMITS.max_take_gap:
+                raise SchemaError(f"take {key!r}: a gap of {steps[k]:.6g} s between frames "
+                                  f"(limit {LIMITS.max_take_gap:g} s)", source=source,
+                                  column="time", row=int(rows[k + 1]))
+
+
 RECORDING = TableSpec(
     name="recording",
     version=RECORDING_VERSION,
@@ -82,7 +104,8 @@ RECORDING = TableSpec(
                "Fraction of the string length removed by the finger, 1 - 2**(-semitones/12).",
                minimum=0.0, maximum=0.8),
     ),
-    checks=(non_decreasing("time", within="recording_id"), _steady_frame_rate),
+    checks=(non_decreasing("time", within="recording_id"), _bounded_takes,
+            _steady_frame_rate),
     extra_metadata={"frame_rate_hz": repr(RECORDING_FRAME_RATE)},
 )
 

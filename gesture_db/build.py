@@ -14,7 +14,6 @@ from __future__ import annotations
 import datetime as _dt
 import os
 from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -30,7 +29,8 @@ from data_schemas.gesture_db import (
     read_manifest,
     write_manifest,
 )
-from data_schemas.io import write_table
+from data_schemas.io import remove_stale_temps, write_table
+from data_schemas.workers import process_pool
 from gesture_db.extract import extract_take
 from gesture_db.features import fit_group_model
 from gesture_db.groups import grammar_for
@@ -174,6 +174,7 @@ def _build(db: Path, previous: dict | None, kept: dict[str, dict],
            on_source_done: Callable[[str], None] | None) -> dict:
     """Process the new sources, fit the models and commit the next generation."""
     db.mkdir(parents=True, exist_ok=True)
+    remove_stale_temps(db, recursive=True)  # left by a killed build
     results, pending = _resume(db, todo)
     resumed = len(results)
     bar = tqdm(total=len(pending), desc="build-db", unit="source", disable=not progress)
@@ -245,7 +246,7 @@ def _run(pending: list[tuple[Source, str]], params: BuildParams, workers: int | 
     import dask
 
     batch = 2 * workers
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with process_pool(workers) as pool:
         for start in range(0, len(pending), batch):
             chunk = pending[start:start + batch]
             tasks = [dask.delayed(process_source)(src, params, dig) for src, dig in chunk]

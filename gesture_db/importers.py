@@ -47,7 +47,7 @@ import pyarrow.parquet as pq
 
 from data_schemas.annotation import check_within_take, read_annotation
 from data_schemas.errors import ArcoError, SchemaError
-from data_schemas.io import metadata_text
+from data_schemas.io import column_names, metadata_text
 from data_schemas.recording import (
     DEFAULT_INSTRUMENT,
     RECORDING,
@@ -217,7 +217,8 @@ def load_recording_file(path: str | os.PathLike) -> pd.DataFrame:
     meta = table.schema.metadata or {}
     kind = metadata_text(meta, "arco_table", str(path))
     if kind == "actions" or (not kind and "pluck" in table.column_names):
-        return recording_from_actions(table.to_pandas(), recording_id=path.stem)
+        return recording_from_actions(table.to_pandas(), recording_id=path.stem,
+                                      source=str(path))
     if kind and kind != "recording":
         raise SchemaError(f"holds table '{kind}', expected a recording or actions table",
                           source=str(path))
@@ -237,7 +238,7 @@ def _read_any(path: Path):
             table = pq.read_table(path)
     except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
         raise SchemaError(f"cannot read: {str(exc).splitlines()[0]}", source=str(path)) from None
-    unique_columns(table.column_names, str(path))
+    unique_columns(column_names(table, str(path)), str(path))
     return table
 
 
@@ -261,8 +262,9 @@ def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame 
         if name in columns:
             col = columns[name]
             if col not in raw:
-                raise SchemaError(f"mapped column '{col}' not in the export (has "
-                                  f"{list(raw.columns)})", source=str(data_path), column=name)
+                raise SchemaError(f"mapped column '{col}' not in the export {data_path} "
+                                  f"(has {list(raw.columns)})", source=str(mapping),
+                                  column=name)
             frame[name] = _numbers(raw[col], data_path, col) * float(scale.get(name, 1.0))
         elif name in raw:
             frame[name] = _numbers(raw[name], data_path, name) * float(scale.get(name, 1.0))
@@ -291,7 +293,8 @@ def _numbers(column: pd.Series, path: Path, name: str) -> pd.Series:
 
 
 def recording_from_actions(actions: pd.DataFrame, *, recording_id: str = "actions",
-                           frame_rate: float = RECORDING_FRAME_RATE) -> pd.DataFrame:
+                           frame_rate: float = RECORDING_FRAME_RATE,
+                           source: str | None = None) -> pd.DataFrame:
     """Turn an actions table into a recording: one string at a time, resampled.
 
     At each action time the most pressed string is kept; continuous columns are interpolated
@@ -307,12 +310,22 @@ def recording_from_actions(actions: pd.DataFrame, *, recording_id: str = "action
         Take identifier.
     frame_rate : float
         Output frame rate (Hz).
+    source : str, optional
+        The file, named in errors (default: the take identifier).
     """
+    from data_schemas.limits import LIMITS
+
+    source = source or recording_id
     if actions.empty:
-        raise ArcoError(f"actions table '{recording_id}' is empty")
+        raise ArcoError(f"{source}: the actions table is empty")
     a = actions.sort_values(["time", "bow_force"], kind="stable")
     a = a.groupby("time", sort=True).tail(1).sort_values("time", kind="stable")
     t_src = a["time"].to_numpy(float)
+    span = float(t_src[-1] - t_src[0])
+    if not span <= LIMITS.max_take_duration:
+        raise SchemaError(f"the actions span {span:.6g} s, over the limit of "
+                          f"{LIMITS.max_take_duration:g} s for one take", source=source,
+                          column="time")
     t = np.arange(t_src[0], t_src[-1] + 0.5 / frame_rate, 1.0 / frame_rate)
     out = {"recording_id": recording_id, "time": t - t[0]}
     for c in ("bow_velocity", "bow_force", "beta", "bow_position"):
@@ -320,7 +333,7 @@ def recording_from_actions(actions: pd.DataFrame, *, recording_id: str = "action
     idx = np.clip(np.searchsorted(t_src, t, side="right") - 1, 0, len(t_src) - 1)
     out["string"] = a["string"].to_numpy()[idx].astype(np.int8)
     out["finger_ratio"] = a["finger_ratio"].to_numpy(float)[idx]
-    return validate_recording(pd.DataFrame(out), source=recording_id)
+    return validate_recording(pd.DataFrame(out), source=source)
 
 
 __all__ = ["Source", "load_mapped", "load_recording_file", "load_source",

@@ -40,6 +40,8 @@ def render_actions(
     body_seed: int = 0,
     tail: float = DEFAULT_TAIL,
     progress: bool = False,
+    max_duration: float | None = None,
+    source: str = "<actions>",
 ) -> np.ndarray:
     """Render an actions table to mono audio.
 
@@ -65,6 +67,11 @@ def render_actions(
         Ring-out rendered after the last row.
     progress : bool
         Show a progress bar.
+    max_duration : float, optional, s
+        Longest audio allowed, last row plus ``tail`` (default
+        :data:`data_schemas.limits.LIMITS`); checked before anything is allocated.
+    source : str
+        The table's file, named in errors.
 
     Returns
     -------
@@ -83,7 +90,8 @@ def render_actions(
     return render_with_diagnostics(actions, instrument=instrument, engine=engine,
                                    sample_rate=sample_rate, seed=seed, oversample=oversample,
                                    body=body, body_seed=body_seed, tail=tail,
-                                   progress=progress, diagnostics=False)[0]
+                                   progress=progress, diagnostics=False,
+                                   max_duration=max_duration, source=source)[0]
 
 
 def render_with_diagnostics(
@@ -99,6 +107,8 @@ def render_with_diagnostics(
     tail: float = DEFAULT_TAIL,
     progress: bool = False,
     diagnostics: bool = True,
+    max_duration: float | None = None,
+    source: str = "<actions>",
 ) -> tuple[np.ndarray, pd.DataFrame | None]:
     """Render like :func:`render_actions` and also return per-hop contact diagnostics.
 
@@ -110,12 +120,40 @@ def render_with_diagnostics(
         :data:`data_schemas.CONTACT_DIAGNOSTICS`), or None when not asked for or when the
         engine cannot measure them.
     """
+    check_length(actions, tail, source, max_duration)
     options = {"oversample": oversample, "body": body, "body_seed": body_seed}
     inst = _engine(instrument, engine, sample_rate, seed, options)
     audio, table = inst.render(actions, tail=tail, progress=progress,
                                diagnostics=diagnostics and inst.has_diagnostics)
     check_audio(audio, sample_rate=inst.sample_rate)
     return audio, table
+
+
+def check_length(actions: pd.DataFrame, tail: float, source: str = "<actions>",
+                 max_duration: float | None = None) -> None:
+    """Refuse an actions table whose last row plus ``tail`` is longer than allowed.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``source`` and the option that raises the limit.
+
+    Examples
+    --------
+    >>> check_length(pd.DataFrame({"time": [0.0, 2.0]}), tail=1.0)
+    >>> check_length(pd.DataFrame({"time": [0.0, 1e9]}), 1.0, "a.csv")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: a.csv: the performance lasts 1e+09 s, over the limit...
+    """
+    from data_schemas.limits import check_duration
+
+    if not len(actions) or "time" not in actions:
+        return
+    times = pd.to_numeric(actions["time"], errors="coerce").to_numpy(np.float64)
+    times = times[np.isfinite(times)]  # text, NaN and inf are the table check's to report
+    if times.size:
+        check_duration(float(times.max()) + float(tail), source, max_duration)
 
 
 def check_audio(audio: np.ndarray, ceiling: float = AUDIO_CEILING, *,

@@ -65,6 +65,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def one_line(text: str) -> str:
+    r"""``text`` with control characters (a file's odd column name, say) escaped.
+
+    Examples
+    --------
+    >>> one_line("column 'a\rb': unexpected")
+    "column 'a\\rb': unexpected"
+    """
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text.strip())
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``arco`` with ``argv`` (default ``sys.argv[1:]``) and return the exit code."""
     parser = build_parser()
@@ -72,7 +83,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except ArcoError as exc:
-        print(f"arco {args.command}: error: {exc}", file=sys.stderr)
+        print(f"arco {args.command}: error: {one_line(str(exc))}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print(f"arco {args.command}: interrupted", file=sys.stderr)

@@ -45,3 +45,47 @@ def _integer(text: str, lowest: int) -> int:
     if value < lowest:
         raise argparse.ArgumentTypeError(f"{value} is not an integer >= {lowest}")
     return value
+
+
+def positive_seconds(text: str) -> float:
+    """A finite number of seconds > 0 (limits such as ``--max-duration``).
+
+    Examples
+    --------
+    >>> positive_seconds("3600")
+    3600.0
+    >>> positive_seconds("inf")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: 'inf' is not a finite number of seconds > 0
+    """
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number of seconds > 0")
+    return value
+
+
+def add_limit_options(group, *, notes: bool) -> None:
+    """Add ``--max-duration`` (and ``--max-notes``) with the defaults of ``limits.toml``.
+
+    Examples
+    --------
+    >>> parser = argparse.ArgumentParser()
+    >>> add_limit_options(parser, notes=True)
+    >>> parser.parse_args(["--max-notes", "5"]).max_notes
+    5
+    """
+    from data_schemas.limits import LIMITS
+
+    group.add_argument("--max-duration", type=positive_seconds, default=LIMITS.max_duration,
+                       metavar="SECONDS", help="refuse performances longer than this "
+                       f"(default: {LIMITS.max_duration:g} s)")
+    if notes:
+        group.add_argument("--max-notes", type=positive_int, default=LIMITS.max_notes,
+                           metavar="N", help="refuse scores with more notes than this "
+                           f"(default: {LIMITS.max_notes})")

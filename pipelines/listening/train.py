@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.errors import ParameterError
+from data_schemas.io import remove_stale_temps
 from data_schemas.labels import AUTO_LABELLER, merge_labels, read_labels, write_labels
 from synth.listening.basic_training import JudgedClip
 from synth.listening.classifier import DYNAMICS, MODEL_FORMAT, pair_key, save_pair
@@ -38,20 +39,54 @@ def pair_seed(seed: int, string: int, dynamic: str) -> int:
     return seed * 1009 + string * 17 + DYNAMICS.index(dynamic)
 
 
-def is_complete(out_dir: str | os.PathLike, key: str) -> bool:
+def is_complete(out_dir: str | os.PathLike, key: str, labels_sha256: str | None = None) -> bool:
     """Whether a pair finished training in this model format (its JSON says ``complete``).
 
     A pair of an older format (the pickled ``.joblib`` models) is not complete: a rerun
-    trains it again in the current format.
+    trains it again in the current format. With ``labels_sha256`` (see
+    :func:`labels_digest`) a pair trained from other labels is not complete either.
     """
     import json
 
     path = Path(out_dir) / f"{key}.json"
     try:
         meta = json.loads(path.read_text("utf-8"))
-        return bool(meta.get("complete")) and meta.get("format") == MODEL_FORMAT
+        done = bool(meta.get("complete")) and meta.get("format") == MODEL_FORMAT
     except (OSError, ValueError, AttributeError):
         return False
+    if not done or labels_sha256 is None:
+        return done
+    trained = meta.get("labels_sha256", "auto" if meta.get("teacher") == "auto" else None)
+    return trained == labels_sha256
+
+
+def _human_rows(labels: pd.DataFrame | None, instrument: str, string: int,
+                dynamic: str) -> pd.DataFrame | None:
+    if labels is None:
+        return None
+    return labels[(labels["instrument"] == instrument) & (labels["string"] == string)
+                  & (labels["dynamic"] == dynamic) & (labels["labeller"] != AUTO_LABELLER)]
+
+
+def labels_digest(teacher: str, labels: pd.DataFrame | None, instrument: str, string: int,
+                  dynamic: str) -> str:
+    """What a pair is trained from: ``"auto"``, or the SHA-256 of its human label rows.
+
+    Recorded in the pair's metadata, so new labels make a finished pair stale.
+
+    Examples
+    --------
+    >>> labels_digest("auto", None, "violin", 1, "mf")
+    'auto'
+    """
+    if teacher == "auto":
+        return "auto"
+    import hashlib
+
+    rows = _human_rows(labels, instrument, string, dynamic)
+    text = "" if rows is None else rows.drop(columns=["time"], errors="ignore").sort_values(
+        ["clip_id", "labeller"], kind="stable").to_csv(index=False)
+    return hashlib.sha256(f"{teacher}\n{text}".encode()).hexdigest()
 
 
 def _labels_frame(clips: list[JudgedClip], key: str, dynamic: str) -> pd.DataFrame:
@@ -128,10 +163,7 @@ def train_one(instrument: str, string: int, dynamic: str, out_dir: str, *,
     key = pair_key(instrument, string, dynamic)
     settings = settings or TrainingSettings()
     seed = pair_seed(seed, string, dynamic)
-    human = None
-    if labels is not None and teacher != "auto":
-        human = labels[(labels["instrument"] == instrument) & (labels["string"] == string)
-                       & (labels["dynamic"] == dynamic) & (labels["labeller"] != AUTO_LABELLER)]
+    human = _human_rows(labels, instrument, string, dynamic) if teacher != "auto" else None
     clips: list[JudgedClip] = []
     frame = None
     if teacher in ("auto", "both"):
@@ -159,6 +191,8 @@ def train_one(instrument: str, string: int, dynamic: str, out_dir: str, *,
     write_labels(frame, out / "labels" / f"{key}.parquet")
     seconds = time.perf_counter() - start
     model.metadata.update(teacher=teacher, train_seconds=seconds,
+                          labels_sha256=labels_digest(teacher, labels, instrument, string,
+                                                      dynamic),
                           settings={k: v for k, v in asdict(settings).items()
                                     if k not in ("controller", "thresholds")})
     save_pair(model, out)
@@ -218,7 +252,9 @@ def train_instrument(instrument: str, out_dir: str | os.PathLike, *, teacher: st
     lanes = lanes or DEFAULT_LANES
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    todo = [(s, d) for s, d in pairs if not is_complete(out, pair_key(instrument, s, d))]
+    remove_stale_temps(out, recursive=True)
+    todo = [(s, d) for s, d in pairs if not is_complete(
+        out, pair_key(instrument, s, d), labels_digest(teacher, labels, instrument, s, d))]
     kwargs = {"teacher": teacher, "labels": labels,
               "labels_base": str(Path(labels_path).parent) if labels_path else ".",
               "settings": settings, "seed": seed}
@@ -259,6 +295,8 @@ def _checked_request(instrument: str, teacher: str, labels_path: str | os.PathLi
     labels = None
     if labels_path is not None:
         labels = read_labels(labels_path)
+        if labels.empty:
+            raise ParameterError(f"{labels_path}: the labels table has no rows")
     elif teacher != "auto":
         raise ParameterError(f"--teacher {teacher} needs --labels LABELS.parquet")
     pairs = list(pairs) if pairs is not None else [(s, d) for s in range(n_strings)
@@ -283,11 +321,11 @@ def _run_jobs(jobs: list[tuple], workers: int | None, scheduler: str | None,
 
 
 def _run_pool(jobs: list[tuple], workers: int, done: Callable[[dict], None]) -> None:
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import as_completed
 
-    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
-                             mp_context=mp.get_context("spawn")) as pool:
+    from data_schemas.workers import process_pool
+
+    with process_pool(min(workers, len(jobs)), context="spawn") as pool:
         futures = [pool.submit(_job, job) for job in jobs]
         for future in as_completed(futures):
             done(future.result())

@@ -34,7 +34,8 @@ def play_rules(notes: pd.DataFrame, parts: list[int], *, config: dict[str, Any],
         y, diag = render_with_diagnostics(
             p.performance.actions, instrument=p.instrument, engine=engine,
             sample_rate=sample_rate, seed=seed, diagnostics=diagnostics,
-            progress=bool(progress) and len(parts) == 1)
+            progress=bool(progress) and len(parts) == 1,
+            max_duration=float("inf"))  # render_method bounded the notes already
         out.append(PartOutput(p.part_index, p.part_name, p.instrument, y,
                               p.performance.actions, p.performance.events, diag,
                               notes[notes["part_index"] == p.part_index],

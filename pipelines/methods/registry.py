@@ -171,7 +171,9 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
                   config: dict[str, Any], database=None, models=None, seed: int = 0,
                   sample_rate: int = 44100, instrument: str | None = None, skill: int = 3,
                   transpose_octaves: bool = False, diagnostics: bool = True,
-                  progress: bool | None = False, engine: str = "modal") -> MethodOutput:
+                  progress: bool | None = False, engine: str = "modal",
+                  max_duration: float | None = None,
+                  max_notes: int | None = None) -> MethodOutput:
     """Render the chosen parts of one score with one method and mix them.
 
     Parameters
@@ -204,15 +206,25 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
         Progress bars.
     engine : str
         Synthesis engine (:func:`synth.engines.engine_names`).
+    max_duration : float, optional, s
+        Longest performance allowed (default :data:`data_schemas.limits.LIMITS`).
+    max_notes : int, optional
+        Most notes allowed in the chosen parts (default as ``max_duration``).
 
     Returns
     -------
     MethodOutput
+
+    Raises
+    ------
+    ParameterError
+        The chosen parts are longer or hold more notes than allowed (before any work).
     """
     from pipelines.methods.result import MethodOutput, mix
 
     if instrument is not None and len(parts) > 1:
         raise ParameterError("--instrument applies to a single part (drop --all-parts)")
+    _check_bounds(notes, parts, stem, max_duration, max_notes)
     start = time.perf_counter()
     out = get_method(method).render(
         notes, parts, config=config, database=database, models=models, seed=seed,
@@ -221,6 +233,20 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
         engine=engine)
     seconds = time.perf_counter() - start
     return MethodOutput(method, stem, mix([p.audio for p in out]), out, seconds)
+
+
+def _check_bounds(notes: pd.DataFrame, parts: list[int], stem: str,
+                  max_duration: float | None, max_notes: int | None) -> None:
+    """The chosen parts' note count and last note end, against the limits."""
+    from data_schemas.limits import check_duration, check_note_count
+
+    chosen = notes[notes["part_index"].isin(parts)] if "part_index" in notes else notes
+    source = stem
+    if "source_file" in chosen and len(chosen):
+        source = str(chosen["source_file"].iloc[0])
+    check_note_count(len(chosen), source, max_notes)
+    if len(chosen) and {"onset", "duration"} <= set(chosen.columns):
+        check_duration(float((chosen["onset"] + chosen["duration"]).max()), source, max_duration)
 
 
 def __getattr__(name: str) -> Any:

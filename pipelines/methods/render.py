@@ -23,7 +23,8 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
                  config: str | os.PathLike | dict[str, Any] | None = None,
                  db=None, models: str | os.PathLike | None = None,
                  search_config: str | os.PathLike | None = None, diagnostics: bool = False,
-                 progress: bool | None = False) -> MethodOutput:
+                 progress: bool | None = False, max_duration: float | None = None,
+                 max_notes: int | None = None) -> MethodOutput:
     """Play a score (or a notes table) with one method on one engine.
 
     Parameters
@@ -39,15 +40,12 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
         a list of part indices.
     start_measure, end_measure, movement : int, optional
         Play only these measures (inclusive) of this movement (from 1; default the first).
-    seed : int
-        Seed of the performer's jitter and of the engine.
-    sample_rate : int, Hz
+    seed, sample_rate : int
+        Seed of the performer's jitter and of the engine; sample rate (Hz).
     instrument : str, optional
         Play a single part on this instrument instead of the score's.
-    skill : int
-        Performer skill 0 (worst) .. 3 (exact), for the rules-planned methods.
-    transpose_octaves : bool
-        Fold notes outside the instrument's range by octaves.
+    skill, transpose_octaves : int and bool
+        Performer skill 0 (worst) .. 3 (exact); fold notes out of range by octaves.
     config : path-like or dict, optional
         Rules settings: a TOML merged over the shipped ones, or a loaded configuration.
     db, models : path-like, optional
@@ -59,6 +57,8 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
         Record the engine's per-hop contact diagnostics of every part.
     progress : bool, optional
         Progress bars (None: when stderr is a terminal).
+    max_duration, max_notes : float (s) and int, optional
+        Longest performance and most notes allowed (default: ``data_schemas.limits``).
 
     Returns
     -------
@@ -93,7 +93,8 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
                          models=models, seed=seed, sample_rate=sample_rate,
                          instrument=instrument, skill=skill,
                          transpose_octaves=transpose_octaves, diagnostics=diagnostics,
-                         progress=progress, engine=engine)
+                         progress=progress, engine=engine, max_duration=max_duration,
+                         max_notes=max_notes)
 
 
 def _select(score, parts, start: int | None, end: int | None, movement: int | None = None,

@@ -393,7 +393,8 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
 
     y, diag = render_with_diagnostics(perf.actions, instrument=part.instrument, engine=engine,
                                       sample_rate=sample_rate, seed=seed,
-                                      diagnostics=diagnostics)
+                                      diagnostics=diagnostics,
+                                      max_duration=float("inf"))  # notes bounded already
     part.audio = np.asarray(y, np.float32)
     part.diagnostics = diag
 

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from data_schemas.limits import tempo_problem
 from pipelines.score.assemble import RawPart, assemble
 from pipelines.score.errors import ScoreError
 from pipelines.score.tempo import TempoMap
@@ -98,6 +99,9 @@ def _read_track(track, t: int, tpb: float, path: Path, tempi: list[tuple[float, 
             if msg.tempo <= 0:
                 raise ScoreError(f"{path}: track {t} tick {tick}: tempo of {msg.tempo} "
                                  "microseconds per beat (must be > 0)")
+            problem = tempo_problem(60e6 / msg.tempo)
+            if problem:
+                raise ScoreError(f"{path}: track {t} tick {tick}: {problem}")
             tempi.append((beat, 60e6 / msg.tempo))
         elif msg.type == "time_signature":
             if msg.numerator <= 0:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from data_schemas.limits import tempo_problem
 from data_schemas.notes import DYNAMIC_LEVELS
 from pipelines.score.assemble import RawPart, assemble_report
 from pipelines.score.errors import ScoreError
@@ -280,7 +281,11 @@ def _metronome_bpm(mark, where: str) -> float | None:
     number = mark.number
     if number is not None and not 0 < float(number) < float("inf"):
         raise ScoreError(f"{where}: metronome mark of {number} per minute (must be > 0)")
-    return mark.getQuarterBPM()
+    bpm = mark.getQuarterBPM()
+    problem = None if bpm is None else tempo_problem(float(bpm))
+    if problem:
+        raise ScoreError(f"{where}: metronome mark: {problem}")
+    return bpm
 
 
 def _word_tempo(text: str) -> float | None:

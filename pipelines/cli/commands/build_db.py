@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
-from pipelines.cli.outputs import output_dir
+from data_schemas.errors import ArcoError
+from pipelines.cli.outputs import output_dir, removed_on_failure
 from pipelines.cli.types import positive_int
 
 
@@ -31,9 +33,12 @@ def run(args: argparse.Namespace) -> int:
     """Build and print a one-line summary."""
     from gesture_db.build import build_database
 
+    fresh = not Path(args.output).exists()
     output_dir(args.output)
-    m = build_database(args.recordings, args.output, workers=args.workers,
-                       scheduler=args.scheduler, append=args.append)
+    # bad input in a fresh build leaves no database folder (an interrupted one can resume)
+    with removed_on_failure(*([args.output] if fresh else []), errors=ArcoError):
+        m = build_database(args.recordings, args.output, workers=args.workers,
+                           scheduler=args.scheduler, append=args.append)
     seg = m.get("segmentation", {})
     extra = ""
     if seg.get("median_boundary_error_ms") is not None:

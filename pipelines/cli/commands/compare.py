@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from pipelines.cli.outputs import output_dir
+from pipelines.cli.outputs import output_dir, removed_on_failure
 from pipelines.cli.types import MOVEMENT_HELP, non_negative_int, positive_int
 
 DEFAULT_METHODS = "rules,feedback,sampling,sampling-open"
@@ -46,10 +46,10 @@ def run(args: argparse.Namespace) -> int:
     output_dir(args.output)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    compare(args.scores, args.output, methods=methods, db=args.db, models=args.models,
-            part=args.part, all_parts=args.all_parts, start_measure=args.start_measure,
-            end_measure=args.end_measure, movement=args.movement, seed=args.seed,
-            sample_rate=args.sample_rate,
-            search_config=args.search_config, log=say)
+    with removed_on_failure(args.output):  # a failed comparison leaves no partial report
+        compare(args.scores, args.output, methods=methods, db=args.db, models=args.models,
+                part=args.part, all_parts=args.all_parts, start_measure=args.start_measure,
+                end_measure=args.end_measure, movement=args.movement, seed=args.seed,
+                sample_rate=args.sample_rate, search_config=args.search_config, log=say)
     say(f"wrote {args.output}/index.html, results.json, results.csv")
     return 0

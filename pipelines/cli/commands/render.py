@@ -8,8 +8,8 @@ import sys
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
-from pipelines.cli.outputs import output_file
-from pipelines.cli.types import MOVEMENT_HELP, non_negative_int, positive_int
+from pipelines.cli.outputs import output_file, removed_on_failure
+from pipelines.cli.types import MOVEMENT_HELP, add_limit_options, non_negative_int, positive_int
 from pipelines.methods.registry import METHODS, check_methods, get_method
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
@@ -57,6 +57,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     play.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
     play.add_argument("--config", metavar="RULES.toml",
                       help="rules settings merged over the shipped defaults")
+    add_limit_options(play, notes=True)
     out = p.add_argument_group("output")
     out.add_argument("-o", "--output", metavar="OUT.wav", help="audio file to write")
     out.add_argument("--actions", metavar="OUT.parquet",
@@ -96,6 +97,10 @@ def _check(args: argparse.Namespace, method: str) -> None:
     for option in ("output", "actions", "diagnostics", "plot"):
         if getattr(args, option):
             output_file(getattr(args, option), "-o" if option == "output" else f"--{option}")
+    for option in ("actions", "diagnostics"):
+        value = getattr(args, option)
+        if value and Path(value).suffix.lower() not in (".parquet", ".pq", ".csv"):
+            raise ParameterError(f"--{option} {value}: use a .parquet (or .csv) file")
     check_methods([method], db=args.db, models=args.models, option="--method")
 
 
@@ -113,11 +118,14 @@ def run(args: argparse.Namespace) -> int:
                           instrument=args.instrument, skill=args.skill,
                           transpose_octaves=args.transpose_octaves, config=args.config,
                           db=args.db, models=args.models, diagnostics=bool(args.diagnostics),
-                          progress=False if args.quiet else None)
+                          progress=False if args.quiet else None,
+                          max_duration=args.max_duration, max_notes=args.max_notes)
     for part in output.parts:
         for warning in part.warnings:
             say(f"arco render: warning: {warning}")
-    _write(args, output, method, say)
+    targets = [getattr(args, o) for o in ("output", "actions", "diagnostics", "plot")]
+    with removed_on_failure(*{Path(t).parent for t in targets if t}, recursive=False):
+        _write(args, output, method, say)  # all of the outputs or none of them
     return 0
 
 

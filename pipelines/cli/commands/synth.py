@@ -8,7 +8,7 @@ from pathlib import Path
 
 from data_schemas.errors import ParameterError
 from pipelines.cli.outputs import output_file
-from pipelines.cli.types import non_negative_int
+from pipelines.cli.types import add_limit_options, non_negative_int
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
 
@@ -34,6 +34,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--body-seed", type=non_negative_int, default=0,
                    help="which synthesized body (an instrument keeps its body across seeds)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_limit_options(p, notes=False)
     p.set_defaults(func=run)
 
 
@@ -51,7 +52,8 @@ def run(args: argparse.Namespace) -> int:
     audio = render_actions(actions, instrument=args.instrument, engine=args.engine,
                            sample_rate=args.sample_rate, seed=args.seed,
                            oversample=args.oversample, body=body, body_seed=args.body_seed,
-                           progress=not args.quiet and sys.stderr.isatty())
+                           progress=not args.quiet and sys.stderr.isatty(),
+                           max_duration=args.max_duration, source=str(args.actions))
     write_audio(args.output, audio, args.sample_rate)
     print(f"wrote {args.output} ({audio.size / args.sample_rate:.2f} s, {args.instrument})")
     return 0
