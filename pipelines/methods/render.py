@@ -53,10 +53,9 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
         models (``arco train``), for the methods that need them.
     search_config : path-like, optional
         Sample-search settings merged over the shipped ones (when ``db`` is a path).
-    diagnostics : bool
-        Record the engine's per-hop contact diagnostics of every part.
-    progress : bool, optional
-        Progress bars (None: when stderr is a terminal).
+    diagnostics, progress : bool, optional
+        Record the engine's per-hop contact diagnostics of every part; progress bars (None:
+        when stderr is a terminal).
     max_duration, max_notes : float (s) and int, optional
         Longest performance and most notes allowed (default: ``data_schemas.limits``).
 
