@@ -1,0 +1,197 @@
+"""Train the cluster-weighted sampler on an audio-frame database.
+
+The recordings carry no bowing measurements, so the model's **inputs are score-derived**,
+per voiced frame inside an aligned note: the note's MIDI pitch, its MIDI velocity (the
+dynamic; dropped when it never varies, as in the Bach recordings, all 64), the time since
+the note's onset (s, clipped to 2 s: the "time since the bow change", taking every note
+onset as one) and the bow direction (+1/-1 alternating note by note within a recording: the
+detached-bowing rule). The **outputs** are the pitch (f0's deviation from the note's MIDI
+pitch, cents) and the volume (frame RMS, dB re full scale). The third expert, the pointer into
+sample space (eq. 3), is for each cluster the aligned note whose frames have the highest
+mean ``log p(x, y | c_k)``; from that note the engine replays the attack and estimates the
+partial amplitudes of the sustain.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.errors import ParameterError
+from synth.cws.cwm import ClusterWeightedModel, fit_cwm
+
+#: Input features, in order (see the module docstring).
+INPUTS = ("midi_pitch", "velocity", "time_since_onset_s", "bow_direction")
+#: Output features, in order.
+OUTPUTS = ("pitch_deviation_cents", "energy_db")
+#: Time since onset is clipped here (s): later frames are all "sustain".
+ONSET_CLIP_S = 2.0
+#: Shortest note that may represent a cluster (s).
+MIN_SAMPLE_S = 0.25
+#: Longest stretch of a note kept for replay (s).
+MAX_SAMPLE_S = 1.2
+#: Most partials estimated per sample.
+MAX_PARTIALS = 40
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One cluster's sample sequence: a note of the database, ready for replay.
+
+    Attributes
+    ----------
+    recording : str
+    note : int
+    sample_rate : int, Hz
+    f0_hz : float, Hz
+        Median f0 of the note's voiced frames.
+    audio : np.ndarray [shape=(n,)]
+        The note from its aligned onset (at most :data:`MAX_SAMPLE_S`).
+    envelope : np.ndarray [shape=(n,)]
+        Its recorded RMS volume per sample (from the frames' energy).
+    partials : np.ndarray [shape=(h,)]
+        Amplitudes of harmonics 1..h in its sustain, scaled to RMS 1.
+    """
+
+    recording: str
+    note: int
+    sample_rate: int
+    f0_hz: float
+    audio: np.ndarray
+    envelope: np.ndarray
+    partials: np.ndarray
+
+
+@dataclass(frozen=True)
+class CwsModel:
+    """A trained cluster-weighted sampler: the CWM, its input columns and one sample per
+    cluster."""
+
+    cwm: ClusterWeightedModel
+    inputs: tuple[str, ...]
+    samples: tuple[Sample, ...]
+
+    def features(self, table: pd.DataFrame) -> np.ndarray:
+        """The model's input matrix from a table with the :data:`INPUTS` columns."""
+        return table[list(self.inputs)].to_numpy(np.float64)
+
+
+def frame_table(db: Any) -> pd.DataFrame:
+    """Voiced frames inside aligned notes with the :data:`INPUTS` and :data:`OUTPUTS`."""
+    frames = db.frames
+    frames = frames[(frames["note"] >= 0) & frames["voiced"].astype(bool)
+                    & np.isfinite(frames["f0_hz"])]
+    notes = db.notes.copy()
+    notes = notes.sort_values(["recording", "onset_s"], kind="stable")
+    notes["bow_direction"] = np.where(notes.groupby("recording").cumcount() % 2 == 0, 1.0, -1.0)
+    t = frames.merge(notes, on=["recording", "note"], how="inner")
+    t["time_since_onset_s"] = np.clip(t["time_s"] - t["onset_s"], 0.0, ONSET_CLIP_S)
+    t["pitch_deviation_cents"] = 1200.0 * np.log2(
+        t["f0_hz"].astype(float) / (440.0 * 2.0 ** ((t["midi_pitch"].astype(float) - 69) / 12)))
+    # octave errors of the pitch tracker are not intonation
+    t = t[np.abs(t["pitch_deviation_cents"]) < 100.0]
+    return t.sort_values(["recording", "time_s"], kind="stable").reset_index(drop=True)
+
+
+def partial_amplitudes(audio: np.ndarray, sample_rate: int, f0: float) -> np.ndarray:
+    """Harmonic amplitudes of a steady stretch (peak of a Hann-windowed spectrum near h f0),
+    scaled so that their sum of sines has RMS 1.
+
+    Examples
+    --------
+    >>> t = np.arange(8192) / 22050
+    >>> a = partial_amplitudes(np.sin(2*np.pi*300*t) + 0.5*np.sin(2*np.pi*600*t), 22050, 300)
+    >>> bool(abs(a[1] / a[0] - 0.5) < 0.02)
+    True
+    """
+    x = np.asarray(audio, float)
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size)))
+    freqs = np.fft.rfftfreq(x.size, 1.0 / sample_rate)
+    n_h = int(min(MAX_PARTIALS, 0.45 * sample_rate // f0))
+    amps = np.zeros(max(n_h, 1))
+    for h in range(1, n_h + 1):
+        band = np.abs(freqs - h * f0) <= 0.03 * h * f0 + 2 * sample_rate / x.size
+        amps[h - 1] = spec[band].max() if band.any() else 0.0
+    if not np.any(amps > 0):
+        amps[0] = 1.0
+    return amps / np.sqrt(np.sum(amps ** 2) / 2.0)
+
+
+def _sample(db: Any, cache: dict, note_row: pd.Series, frames: pd.DataFrame) -> Sample:
+    rec = str(note_row["recording"])
+    if rec not in cache:
+        cache[rec] = np.asarray(db.load_audio(rec), np.float64)
+    audio = cache[rec]
+    rate = int(db.sample_rate)
+    n0 = int(round(float(note_row["onset_s"]) * rate))
+    dur = min(float(note_row["offset_s"] - note_row["onset_s"]), MAX_SAMPLE_S)
+    seg = audio[n0:n0 + int(round(dur * rate))]
+    f0 = float(np.median(frames["f0_hz"]))
+    t = n0 / rate + np.arange(seg.size) / rate
+    env = np.interp(t, frames["time_s"], 10.0 ** (frames["energy_db"].astype(float) / 20.0))
+    steady = seg[int(min(0.15 * rate, seg.size // 3)):]
+    return Sample(rec, int(note_row["note"]), rate, f0, seg, env,
+                  partial_amplitudes(steady, rate, f0))
+
+
+def choose_samples(db: Any, table: pd.DataFrame, cwm: ClusterWeightedModel,
+                   inputs: tuple[str, ...]) -> tuple[Sample, ...]:
+    """Eq. 3: per cluster, the note whose frames have the highest mean log p(x, y | c_k)."""
+    dur = table["offset_s"] - table["onset_s"]
+    ok = table[dur >= MIN_SAMPLE_S]
+    if ok.empty:
+        raise ParameterError("audio database: no voiced aligned note of at least "
+                             f"{MIN_SAMPLE_S} s to sample")
+    score = cwm.log_joint(ok[list(inputs)].to_numpy(float), ok[list(OUTPUTS)].to_numpy(float))
+    per_note = pd.DataFrame(score).groupby([ok["recording"].to_numpy(),
+                                            ok["note"].to_numpy()]).mean()
+    cache: dict = {}
+    out = []
+    for k in range(cwm.n_clusters):
+        rec, note = per_note[k].idxmax()
+        frames = ok[(ok["recording"] == rec) & (ok["note"] == note)]
+        out.append(_sample(db, cache, frames.iloc[0], frames))
+    return tuple(out)
+
+
+def train(db: Any, *, n_clusters: int = 12, seed: int = 0,
+          max_frames: int = 20000) -> CwsModel:
+    """Fit the cluster-weighted sampler to an audio-frame database.
+
+    Parameters
+    ----------
+    db : AudioDatabase-like
+        ``frames``, ``notes``, ``sample_rate`` and ``load_audio(recording)``.
+    n_clusters : int
+        K.
+    seed : int
+        Seed of EM's start.
+    max_frames : int
+        Frames used for EM (every m-th frame when there are more).
+
+    Returns
+    -------
+    CwsModel
+
+    Raises
+    ------
+    ParameterError
+        Fewer usable frames than clusters, or no note long enough to sample.
+    """
+    table = frame_table(db)
+    if len(table) < max(n_clusters, 2):
+        raise ParameterError(f"audio database {getattr(db, 'root', '')}: {len(table)} voiced "
+                             f"frames in aligned notes, need at least {n_clusters}")
+    inputs = tuple(c for c in INPUTS if table[c].std() > 0)
+    step = max(1, int(np.ceil(len(table) / max_frames)))
+    fit = table.iloc[::step]
+    cwm = fit_cwm(fit[list(inputs)].to_numpy(float), fit[list(OUTPUTS)].to_numpy(float),
+                  min(n_clusters, len(fit)), seed=seed)
+    return CwsModel(cwm, inputs, choose_samples(db, table, cwm, inputs))
+
+
+__all__ = ["INPUTS", "OUTPUTS", "CwsModel", "Sample", "frame_table", "partial_amplitudes",
+           "train"]
