@@ -30,7 +30,7 @@ def _logsumexp(a: np.ndarray) -> np.ndarray:
 
 
 def _log_gauss(z: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> np.ndarray:
-    """log N(z; mean, cov) for every row of ``z``."""
+    """Log N(z; mean, cov) for every row of ``z``."""
     chol = np.linalg.cholesky(cov)
     sol = np.linalg.solve(chol, (z - mean).T)
     return -0.5 * (np.sum(sol * sol, axis=0) + z.shape[1] * _LOG_2PI) - np.sum(
@@ -233,7 +233,7 @@ def fit_cwm(x: np.ndarray, y: np.ndarray, n_clusters: int, *, seed: int = 0,
         log_j = _log_joint(z, zy, model)
         total = _logsumexp(log_j)
         history.append(float(total.sum()))
-        if len(history) > 1 and history[-1] - history[-2] < tol * x.shape[0]:
+        if len(history) > 1 and abs(history[-1] - history[-2]) <= tol * x.shape[0]:
             break
         model = _m_step(z, zy, np.exp(log_j - total[:, None]), reg, base)
     return ClusterWeightedModel(xm, xs, ym, ys, model.weights, model.means, model.covariances,

@@ -67,8 +67,10 @@ class Sample:
 
 @dataclass(frozen=True)
 class CwsModel:
-    """A trained cluster-weighted sampler: the CWM, its input columns and one sample per
-    cluster."""
+    """A trained cluster-weighted sampler.
+
+    The CWM, its input columns and one sample per cluster.
+    """
 
     cwm: ClusterWeightedModel
     inputs: tuple[str, ...]
@@ -97,8 +99,10 @@ def frame_table(db: Any) -> pd.DataFrame:
 
 
 def partial_amplitudes(audio: np.ndarray, sample_rate: int, f0: float) -> np.ndarray:
-    """Harmonic amplitudes of a steady stretch (peak of a Hann-windowed spectrum near h f0),
-    scaled so that their sum of sines has RMS 1.
+    """Harmonic amplitudes of a steady stretch, scaled so that their sum of sines has RMS 1.
+
+    Each is the energy of a Hann-windowed spectrum within 3 % of ``h f0`` (the energy of a
+    window's main lobe does not depend on where the partial falls between bins).
 
     Examples
     --------
@@ -114,7 +118,7 @@ def partial_amplitudes(audio: np.ndarray, sample_rate: int, f0: float) -> np.nda
     amps = np.zeros(max(n_h, 1))
     for h in range(1, n_h + 1):
         band = np.abs(freqs - h * f0) <= 0.03 * h * f0 + 2 * sample_rate / x.size
-        amps[h - 1] = spec[band].max() if band.any() else 0.0
+        amps[h - 1] = np.sqrt(np.sum(spec[band] ** 2))
     if not np.any(amps > 0):
         amps[0] = 1.0
     return amps / np.sqrt(np.sum(amps ** 2) / 2.0)
