@@ -18,3 +18,11 @@ def naive_sinc_resample(x, positions, ratio, half_taps=16):
         w = 0.5 + 0.5 * np.cos(np.pi * t / reach)
         out[j] = np.sum((x * h * w)[inside])
     return out
+
+
+def naive_harmonic_sum(amplitudes, phases, omega, n):
+    """sum_h a_h sin(h omega k + phi_h) with one sin per sample and partial."""
+    k = np.arange(n)
+    h = np.arange(1, len(amplitudes) + 1)
+    return (np.asarray(amplitudes) * np.sin(np.outer(k, h) * omega + np.asarray(phases))
+            ).sum(axis=1) if n else np.zeros(0)

@@ -33,12 +33,20 @@ def _sinc_resample(x, positions, cutoff, half_taps):  # pragma: no cover - numba
             lo = 0
         if hi > n - 1:
             hi = n - 1
+        # sin(pi c t) and cos(pi t / reach) step by rotation as t falls by 1 per tap
+        t = p - lo
+        du, dw = math.pi * c, math.pi / reach
+        su, cu = math.sin(du * t), math.cos(du * t)
+        sw, cw = math.sin(dw * t), math.cos(dw * t)
+        sdu, cdu, sdw, cdw = math.sin(du), math.cos(du), math.sin(dw), math.cos(dw)
         acc = 0.0
         for i in range(lo, hi + 1):
-            t = p - i
-            u = math.pi * c * t
-            h = c if u == 0.0 else c * math.sin(u) / u
-            acc += x[i] * h * (0.5 + 0.5 * math.cos(math.pi * t / reach))
+            u = du * t
+            h = c if abs(u) < 1e-12 else c * su / u
+            acc += x[i] * h * (0.5 + 0.5 * cw)
+            su, cu = su * cdu - cu * sdu, cu * cdu + su * sdu
+            sw, cw = sw * cdw - cw * sdw, cw * cdw + sw * sdw
+            t -= 1.0
         out[j] = acc
     return out
 

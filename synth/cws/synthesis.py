@@ -19,6 +19,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from data_schemas.instruments import dynamics_table
+from synth.cws.harmonic_kernel import harmonic_sum
 from synth.cws.joins import align_offset, crossfade, fade_curve, scale_volume
 from synth.cws.resample_kernel import sinc_resample
 from synth.cws.training import ONSET_CLIP_S, CwsModel, Sample
@@ -76,10 +77,11 @@ def note_inputs(notes: pd.DataFrame, time_since_onset: np.ndarray, index: int,
                 model: CwsModel) -> np.ndarray:
     """Input rows of note ``index`` at the given times since its onset (s)."""
     row = notes.iloc[index]
-    table = pd.DataFrame({"midi_pitch": row["midi_pitch"], "velocity": row["velocity"],
-                          "time_since_onset_s": np.clip(time_since_onset, 0.0, ONSET_CLIP_S),
-                          "bow_direction": row["bow_direction"]})
-    return model.features(table)
+    columns = {"time_since_onset_s": np.clip(time_since_onset, 0.0, ONSET_CLIP_S)}
+    n = columns["time_since_onset_s"].size
+    for name in ("midi_pitch", "velocity", "bow_direction"):
+        columns[name] = np.full(n, float(row[name]))
+    return np.column_stack([columns[c] for c in model.inputs])
 
 
 def harmonic(sample: Sample, f0: float, n: int, sample_rate: int,
@@ -87,10 +89,7 @@ def harmonic(sample: Sample, f0: float, n: int, sample_rate: int,
     """The sample's partials at ``f0`` (those below 0.45 x the rate), RMS 1, seeded phases."""
     amps = sample.partials[: max(1, int(0.45 * sample_rate / f0))]
     phases = rng.uniform(0.0, 2.0 * np.pi, amps.size)
-    w = 2.0 * np.pi * f0 / sample_rate * np.arange(n)
-    out = np.zeros(n)
-    for h, (a, p) in enumerate(zip(amps, phases, strict=True), start=1):
-        out += a * np.sin(h * w + p)
+    out = harmonic_sum(amps, phases, 2.0 * np.pi * f0 / sample_rate, n)
     return out / max(np.sqrt(np.sum(amps ** 2) / 2.0), 1e-12)
 
 
