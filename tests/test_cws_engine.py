@@ -82,6 +82,15 @@ def test_attack_replays_the_sample_after_a_bow_change(db):
         x[int(0.8 * RATE):int(0.83 * RATE)])
 
 
+def test_render_actions_plays_it_with_an_engine_object(db):
+    from synth.render import render_actions
+
+    engine = get_engine("cws", "violin", sample_rate=RATE, seed=0, audio_db=db, n_clusters=3,
+                        oversample=2, body="synthesized", body_seed=0)
+    audio = render_actions(phrase([0, 4]), instrument=engine, sample_rate=RATE)
+    assert audio.size == int(round((0.995 + 1.0) * RATE)) and np.abs(audio).max() > 0.01
+
+
 def test_clear_errors(db):
     with pytest.raises(ParameterError, match="audio_db"):
         get_engine("cws", "violin")

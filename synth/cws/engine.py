@@ -26,6 +26,8 @@ from data_schemas.errors import ParameterError
 from data_schemas.instruments import instrument_facts
 
 _MODELS: dict[tuple, Any] = {}
+#: The modal engine's settings, ignored here (see :class:`CwsEngine`).
+MODAL_SETTINGS = ("oversample", "body", "body_seed")
 
 
 def _database(audio_db: Any) -> Any:
@@ -72,7 +74,9 @@ class CwsEngine:
         Clusters of the model.
     **settings
         Fields of :class:`synth.cws.synthesis.SynthesisSettings` (``attack_s``, ``fade_s``,
-        ``onset_fade_s``, ``half_taps``, ``intonation``).
+        ``onset_fade_s``, ``half_taps``, ``intonation``). The modal engine's settings that
+        :func:`synth.render_actions` passes to every engine (``oversample``, ``body``,
+        ``body_seed``) are accepted and ignored: the recordings bring their own body.
 
     Examples
     --------
@@ -89,6 +93,8 @@ class CwsEngine:
                  audio_db: Any = None, n_clusters: int = 12, **settings: Any) -> None:
         from synth.cws.synthesis import SynthesisSettings
 
+        for modal_only in MODAL_SETTINGS:
+            settings.pop(modal_only, None)
         self.name = instrument
         self.n_strings = len(instrument_facts(instrument).open_strings)
         self.sample_rate = int(sample_rate)
@@ -115,7 +121,7 @@ class CwsEngine:
                              "blocks: use it without the listening loop (method rules or "
                              "sampling-open)")
 
-    def render(self, actions: pd.DataFrame, *, tail: float = 0.5, progress: bool = False,
+    def render(self, actions: pd.DataFrame, *, tail: float = 1.0, progress: bool = False,
                diagnostics: bool = False) -> tuple[np.ndarray, None]:
         """Play a whole actions table; float32 mono audio and no diagnostics.
 
