@@ -33,6 +33,12 @@ ONSET_CLIP_S = 2.0
 MIN_SAMPLE_S = 0.25
 #: Longest stretch of a note kept for replay (s).
 MAX_SAMPLE_S = 1.2
+#: A sample note must have at least this share of its length in voiced frames within
+#: :data:`SAMPLE_CENTS` of its pitch, and overlap no other note by more than
+#: :data:`OVERLAP_S` (no chord, no mis-aligned neighbour in the replayed attack).
+SAMPLE_VOICED_SHARE = 0.6
+SAMPLE_CENTS = 50.0
+OVERLAP_S = 0.05
 #: Most partials estimated per sample.
 MAX_PARTIALS = 40
 
@@ -141,13 +147,34 @@ def _sample(db: Any, cache: dict, note_row: pd.Series, frames: pd.DataFrame) -> 
                   partial_amplitudes(steady, rate, f0))
 
 
+def clean_notes(db: Any, table: pd.DataFrame) -> pd.Series:
+    """Per frame of ``table``: does its note qualify as a sample (long, solo, in tune)?"""
+    notes = db.notes.sort_values(["recording", "onset_s"], kind="stable")
+    prev_end = notes.groupby("recording")["offset_s"].cummax().groupby(
+        notes["recording"]).shift(1)
+    next_start = notes.groupby("recording")["onset_s"].shift(-1)
+    solo = ~((notes["onset_s"] < prev_end - OVERLAP_S)
+             | (notes["offset_s"] > next_start + OVERLAP_S))
+    dur = notes["offset_s"] - notes["onset_s"]
+    good = table[np.abs(table["pitch_deviation_cents"]) < SAMPLE_CENTS]
+    voiced = good.groupby(["recording", "note"]).size() * float(db.hop_s)
+    key = pd.MultiIndex.from_arrays([notes["recording"], notes["note"]])
+    share = voiced.reindex(key).fillna(0.0).to_numpy() / np.maximum(dur.to_numpy(), 1e-9)
+    ok = pd.Series(solo.to_numpy() & (dur.to_numpy() >= MIN_SAMPLE_S)
+                   & (share >= SAMPLE_VOICED_SHARE), index=key)
+    return pd.Series(ok.reindex(pd.MultiIndex.from_arrays(
+        [table["recording"], table["note"]])).fillna(False).to_numpy(bool), index=table.index)
+
+
 def choose_samples(db: Any, table: pd.DataFrame, cwm: ClusterWeightedModel,
                    inputs: tuple[str, ...]) -> tuple[Sample, ...]:
-    """Eq. 3: per cluster, the note whose frames have the highest mean log p(x, y | c_k)."""
-    dur = table["offset_s"] - table["onset_s"]
-    ok = table[dur >= MIN_SAMPLE_S]
+    """Eq. 3: per cluster, the note whose frames have the highest mean log p(x, y | c_k).
+
+    Only notes that :func:`clean_notes` accepts are candidates.
+    """
+    ok = table[clean_notes(db, table)]
     if ok.empty:
-        raise ParameterError("audio database: no voiced aligned note of at least "
+        raise ParameterError("audio database: no solo, voiced aligned note of at least "
                              f"{MIN_SAMPLE_S} s to sample")
     score = cwm.log_joint(ok[list(inputs)].to_numpy(float), ok[list(OUTPUTS)].to_numpy(float))
     per_note = pd.DataFrame(score).groupby([ok["recording"].to_numpy(),
