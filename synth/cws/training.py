@@ -148,7 +148,7 @@ def _sample(db: Any, cache: dict, note_row: pd.Series, frames: pd.DataFrame) -> 
 
 
 def clean_notes(db: Any, table: pd.DataFrame) -> pd.Series:
-    """Per frame of ``table``: does its note qualify as a sample (long, solo, in tune)?"""
+    """Per frame of ``table``: whether its note qualifies as a sample (long, solo, in tune)."""
     notes = db.notes.sort_values(["recording", "onset_s"], kind="stable")
     prev_end = notes.groupby("recording")["offset_s"].cummax().groupby(
         notes["recording"]).shift(1)
