@@ -2,7 +2,8 @@
 
 For each annotated recording (default: the shared Bach Violin Dataset in
 ``$ARCO_SHARED_DATA/bach-violin``, else ``<repo>/../shared/data/bach-violin``, else
-``/work/shared/data/bach-violin``; or an audio-frame database with ``--audio-db DB``) the
+``/work/shared/data/bach-violin``, or ``--data DIR`` laid out the same way; with
+``--audio-db DB`` the frames come from that audio-frame database) the
 engine is trained on the **other** recordings and plays the left-out recording's aligned
 notes of the first ``--seconds``. The actions are made from the notes directly, one constant
 stroke per note (documented simplification, no performance rules): the highest open string
@@ -85,13 +86,20 @@ class StandinAudioDatabase:
     def load_audio(self, recording: str) -> np.ndarray:
         return self.audio[recording].astype(np.float32)
 
-    def without(self, recording: str) -> StandinAudioDatabase:
-        keep = [r for r in self.audio if r != recording]
-        return StandinAudioDatabase(
-            self.root, self.sample_rate, self.hop_s,
-            self.frames[self.frames["recording"].isin(keep)].reset_index(drop=True),
-            self.notes[self.notes["recording"].isin(keep)].reset_index(drop=True),
-            {r: self.audio_paths[r] for r in keep}, {r: self.audio[r] for r in keep})
+
+
+def without(db: Any, recording: str) -> Any:
+    """The database minus one recording (any frozen AudioDatabase-like dataclass)."""
+    import dataclasses
+
+    keep = [r for r in db.audio_paths if r != recording]
+    if recording not in db.audio_paths:
+        raise ParameterError(f"audio database has no recording {recording!r} to leave out "
+                             f"(it has {sorted(db.audio_paths)})")
+    return dataclasses.replace(
+        db, frames=db.frames[db.frames["recording"].isin(keep)].reset_index(drop=True),
+        notes=db.notes[db.notes["recording"].isin(keep)].reset_index(drop=True),
+        audio_paths={r: db.audio_paths[r] for r in keep})
 
 
 def _note_of_frames(times: np.ndarray, notes: pd.DataFrame) -> np.ndarray:
@@ -235,7 +243,7 @@ def leave_one_out(db: Any, rec: recordings.Recording, args: argparse.Namespace,
     real = timbre.measure(real_audio, SAMPLE_RATE, table)
     out: dict[str, Any] = {"notes": len(table), "monophonic_notes": len(mono),
                            "real": figures(real_audio, table, mono, None)}
-    train_db = db.without(rec.name)
+    train_db = without(db, rec.name)
     t0 = time.perf_counter()
     trained_model(train_db, n_clusters=args.clusters, seed=args.seed)
     out["train_s"] = time.perf_counter() - t0
@@ -282,6 +290,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--audio-db", metavar="DB", help="an audio-frame database (arco build-db)")
+    p.add_argument("--data", metavar="DIR",
+                   help="recordings laid out like bach-violin (audio/, notes/, alignments/; "
+                        "default: the shared bach-violin folder)")
     p.add_argument("--seconds", type=float, default=30.0,
                    help="render the left-out recording's first N seconds (default 30)")
     p.add_argument("--train-seconds", type=float, default=None,
@@ -303,7 +314,7 @@ def open_database(args: argparse.Namespace, recs: list[recordings.Recording]) ->
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     started = time.perf_counter()
-    recs = shared_recordings()
+    recs = recordings.dataset_recordings(args.data) if args.data else shared_recordings()
     db = open_database(args, recs)
     per = {}
     with tempfile.TemporaryDirectory() as tmp:
