@@ -143,10 +143,20 @@ def _modal(instrument: str = "violin", **settings: Any) -> Engine:
     return Instrument(instrument, **settings)
 
 
+def _cws(instrument: str = "violin", **settings: Any) -> Engine:
+    """Cluster-weighted sampling, imported when an engine is first built."""
+    from synth.cws.engine import CwsEngine
+
+    return CwsEngine(instrument, **settings)
+
+
 def _builtin() -> None:
     if "modal" not in _REGISTRY:
         register_engine("modal", _modal,
                         "modal bowed strings with finger, decimator and body (physical model)")
+    if "cws" not in _REGISTRY:
+        register_engine("cws", _cws, "cluster-weighted sampling of recorded violin audio "
+                        "(needs audio_db; Schoner et al. 2000)")
 
 
 def engine_names() -> list[str]:

@@ -1,0 +1,111 @@
+"""Notes of an actions table, for engines that play whole notes.
+
+Rows are walked in time order (monophonic: one bowed note at a time, double stops become
+alternating notes). A new note starts where the string changes, the stopped pitch moves by
+more than half a semitone from the note's first row (vibrato stays inside), the bow
+reverses, the bow stops (|velocity| below :data:`STILL_MPS`) and moves again, or the rows
+leave a gap longer than :data:`MAX_GAP_S`. Rows without bow force, and plucks, play nothing.
+A note starts with a **bow change** (its attack is replayed) when it is the first, the bow
+reversed or stopped, or a gap or bow-off came before it; otherwise (a string crossing or a
+new finger within one bow: a slur) it is joined legato.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.instruments import instrument_facts, semitones_of
+
+#: Bow slower than this (m/s) counts as stopped.
+STILL_MPS = 0.02
+#: Rows further apart than this (s) end a note.
+MAX_GAP_S = 0.05
+
+NOTE_COLUMNS = ("start_s", "end_s", "string", "f0_hz", "midi_pitch", "bow_speed",
+                "bow_force", "bow_direction", "bow_change")
+
+
+def _directions(v: np.ndarray) -> np.ndarray:
+    """Sign of the bow velocity, rows at rest taking the next moving row's sign."""
+    sign = pd.Series(np.where(np.abs(v) >= STILL_MPS, np.sign(v), np.nan))
+    return sign.bfill().ffill().fillna(1.0).to_numpy()
+
+
+def _boundaries(a: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """Per row: does a new note start here, and is it a bow change."""
+    string = a["string"].to_numpy()
+    pitch = semitones_of(a["finger_ratio"].to_numpy(np.float64))
+    v = a["bow_velocity"].to_numpy(np.float64)
+    t = a["time"].to_numpy(np.float64)
+    direction = _directions(v)
+    still = np.abs(v) < STILL_MPS
+    new = np.zeros(len(a), bool)
+    change = np.zeros(len(a), bool)
+    start_pitch, moved = None, False
+    for i in range(len(a)):
+        gap = i == 0 or t[i] - t[i - 1] > MAX_GAP_S
+        rebow = i > 0 and (direction[i] != direction[i - 1] or (moved and still[i - 1]
+                                                                 and not still[i]))
+        other = i > 0 and (string[i] != string[i - 1] or abs(pitch[i] - start_pitch) > 0.5)
+        if gap or rebow or other:
+            new[i], change[i] = True, gap or rebow
+            start_pitch, moved = pitch[i], False
+        moved = moved or not still[i]
+    return new, change
+
+
+def action_notes(actions: pd.DataFrame, instrument: str = "violin") -> pd.DataFrame:
+    """Segment an actions table into notes.
+
+    Parameters
+    ----------
+    actions : pandas.DataFrame
+        An actions table (:data:`data_schemas.ACTIONS`).
+    instrument : {"violin", "viola", "cello"}
+        Whose open strings give the pitch.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per note: ``start_s, end_s`` (s), ``string``, ``f0_hz`` (Hz, from the open
+        string and the median finger ratio), ``midi_pitch``, ``bow_speed`` (median |v|,
+        m/s), ``bow_force`` (median, N), ``bow_direction`` (+1 down, -1 up) and
+        ``bow_change`` (bool).
+
+    Examples
+    --------
+    >>> t = np.arange(0, 1.0, 0.005)
+    >>> a = pd.DataFrame({"time": t, "string": 2, "finger_ratio": np.where(t < 0.5, 0.0, 0.1),
+    ...                   "bow_force": 1.0, "bow_velocity": np.where(t < 0.7, 0.3, -0.3),
+    ...                   "beta": 0.1, "bow_position": 0.5, "pluck": False})
+    >>> n = action_notes(a)
+    >>> n[["start_s", "midi_pitch", "bow_change"]].round(2).values.tolist()
+    [[0.0, 69.0, True], [0.5, 70.82, False], [0.7, 70.82, True]]
+    """
+    a = actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)]
+    a = a.sort_values("time", kind="stable").reset_index(drop=True)
+    if a.empty:
+        return pd.DataFrame({c: [] for c in NOTE_COLUMNS})
+    new, change = _boundaries(a)
+    note_id = np.cumsum(new) - 1
+    t = a["time"].to_numpy(np.float64)
+    open_midi = np.asarray(instrument_facts(instrument).open_strings, np.float64)
+    rows = []
+    for k in range(note_id[-1] + 1):
+        idx = np.flatnonzero(note_id == k)
+        nxt = idx[-1] + 1
+        joined = nxt < len(a) and t[nxt] - t[idx[-1]] <= MAX_GAP_S
+        end = t[nxt] if joined else t[idx[-1]]
+        s = int(a["string"].iloc[idx[0]])
+        midi = open_midi[s] + float(np.median(semitones_of(
+            a["finger_ratio"].to_numpy(np.float64)[idx])))
+        v = a["bow_velocity"].to_numpy(np.float64)[idx]
+        rows.append((t[idx[0]], max(end, t[idx[0]]), s, 440.0 * 2.0 ** ((midi - 69.0) / 12.0),
+                     midi, float(np.median(np.abs(v))),
+                     float(np.median(a["bow_force"].to_numpy(np.float64)[idx])),
+                     float(_directions(v)[0]), bool(change[idx[0]])))
+    return pd.DataFrame(rows, columns=list(NOTE_COLUMNS))
+
+
+__all__ = ["MAX_GAP_S", "STILL_MPS", "action_notes"]

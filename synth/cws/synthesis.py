@@ -1,0 +1,190 @@
+"""Cluster-weighted sampling synthesis: replayed attacks and a harmonic sustain.
+
+Per note (see :mod:`synth.cws.notes`): the cluster that most likely produced the note's
+inputs at its onset (eq. 4) lends its sample. After a **bow change** the sample's first
+``attack_s`` is replayed, resampled to the target pitch by eq. 5's sinc and scaled by eq. 6
+(target volume over recorded volume); then a harmonic sustain (the sample's partial
+amplitudes at the target f0, seeded phases, the volume predicted by the model's volume
+expert over the time since the bow change) takes over through an eq. 7 alignment and an
+eq. 8 sin^2 cross-fade. A note **slurred** to its predecessor starts in the sustain, aligned
+to the previous note's sound and cross-faded with it. Every note ends with a sin^2 fade.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from data_schemas.instruments import dynamics_table
+from synth.cws.harmonic_kernel import harmonic_sum
+from synth.cws.joins import align_offset, crossfade, fade_curve, scale_volume
+from synth.cws.resample_kernel import sinc_resample
+from synth.cws.training import ONSET_CLIP_S, CwsModel, Sample
+
+#: Hop (s) at which the volume expert is evaluated along a note.
+VOLUME_HOP_S = 0.01
+#: Limit of the dynamic gain either way (dB).
+MAX_DYNAMIC_DB = 18.0
+
+
+@dataclass(frozen=True)
+class SynthesisSettings:
+    """Lengths of the pieces (s) and the resampler's size.
+
+    Attributes
+    ----------
+    attack_s : float, s
+        Replayed attack after a bow change (the paper: about half a second).
+    fade_s : float, s
+        Eq. 8's ``N_f``: attack -> sustain, slur joins and every note's release.
+    onset_fade_s : float, s
+        Fade-in of a replayed attack (the alignment of the recordings is coarse).
+    half_taps : int
+        Eq. 5's ``N``.
+    intonation : bool
+        Add the pitch expert's predicted deviation (cents) to the target pitch.
+    """
+
+    attack_s: float = 0.5
+    fade_s: float = 0.04
+    onset_fade_s: float = 0.004
+    half_taps: int = 16
+    intonation: bool = False
+
+
+def velocity_of(speed: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """MIDI-like velocity and dynamic gain (dB) from bow speed (m/s) and force (N).
+
+    Bowed power grows about as speed x force; 64 (and 0 dB) is the violinist's mf bowing
+    (:func:`data_schemas.instruments.dynamics_table`), 16 velocity steps per doubling.
+
+    Examples
+    --------
+    >>> vel, gain = velocity_of(np.array([0.3]), np.array([0.6]))
+    >>> float(vel[0]), float(gain[0])
+    (64.0, 0.0)
+    """
+    v_mf, f_mf, _ = dynamics_table("violinist").at(5.0)
+    power = np.maximum(np.asarray(speed, float) * np.asarray(force, float), 1e-9) / (v_mf * f_mf)
+    velocity = np.clip(64.0 + 16.0 * np.log2(power), 1.0, 127.0)
+    return velocity, np.clip(10.0 * np.log10(power), -MAX_DYNAMIC_DB, MAX_DYNAMIC_DB)
+
+
+def note_inputs(notes: pd.DataFrame, time_since_onset: np.ndarray, index: int,
+                model: CwsModel) -> np.ndarray:
+    """Input rows of note ``index`` at the given times since its onset (s)."""
+    row = notes.iloc[index]
+    columns = {"time_since_onset_s": np.clip(time_since_onset, 0.0, ONSET_CLIP_S)}
+    n = columns["time_since_onset_s"].size
+    for name in ("midi_pitch", "velocity", "bow_direction"):
+        columns[name] = np.full(n, float(row[name]))
+    return np.column_stack([columns[c] for c in model.inputs])
+
+
+def harmonic(sample: Sample, f0: float, n: int, sample_rate: int,
+             rng: np.random.Generator) -> np.ndarray:
+    """The sample's partials at ``f0`` (those below 0.45 x the rate), RMS 1, seeded phases."""
+    amps = sample.partials[: max(1, int(0.45 * sample_rate / f0))]
+    phases = rng.uniform(0.0, 2.0 * np.pi, amps.size)
+    out = harmonic_sum(amps, phases, 2.0 * np.pi * f0 / sample_rate, n)
+    return out / max(np.sqrt(np.sum(amps ** 2) / 2.0), 1e-12)
+
+
+def attack(sample: Sample, f0: float, target: np.ndarray, sample_rate: int,
+           settings: SynthesisSettings) -> np.ndarray:
+    """Eq. 5 then eq. 6: the sample's start resampled to ``f0`` and scaled to ``target``."""
+    ratio = f0 / sample.f0_hz * sample.sample_rate / sample_rate
+    room = int((sample.audio.size - settings.half_taps / min(1.0, 1.0 / ratio)) / ratio)
+    n = max(0, min(target.size, room))
+    pos = ratio * np.arange(n)
+    s = sinc_resample(sample.audio, pos, ratio, half_taps=settings.half_taps)
+    recorded = np.interp(pos, np.arange(sample.envelope.size), sample.envelope)
+    s = scale_volume(s, target[:n], recorded)
+    k = min(n, int(round(settings.onset_fade_s * sample_rate)))
+    s[:k] *= fade_curve(k)
+    return s
+
+
+def _voice(model: CwsModel, notes: pd.DataFrame, i: int, n: int, prev_tail: np.ndarray | None,
+           sample_rate: int, rng: np.random.Generator,
+           settings: SynthesisSettings) -> tuple[np.ndarray, np.ndarray]:
+    """One note's ``n`` samples (release included, unfaded) and its raw release.
+
+    The raw release is what the next (slurred) note aligns to.
+    """
+    row = notes.iloc[i]
+    tau = np.arange(0.0, n / sample_rate + VOLUME_HOP_S, VOLUME_HOP_S)
+    pred = model.cwm.predict(note_inputs(notes, tau, i, model))
+    sample = model.samples[int(model.cwm.most_likely_cluster(note_inputs(notes, tau[:1], i,
+                                                                         model))[0])]
+    f0 = float(row["f0_hz"])
+    if settings.intonation:
+        f0 *= 2.0 ** (float(np.median(pred[:, 0])) / 1200.0)
+    level = 10.0 ** ((pred[:, 1] + row["gain_db"]) / 20.0)
+    target = np.interp(np.arange(n) / sample_rate, tau, level)
+    nf = int(round(settings.fade_s * sample_rate))
+    lag = int(np.ceil(sample_rate / f0))
+    sustain = harmonic(sample, f0, n + nf + lag, sample_rate, rng)
+    sustain[: n] *= target
+    sustain[n:] *= target[-1]
+    if bool(row["bow_change"]) or prev_tail is None:
+        head = attack(sample, f0, target[: int(settings.attack_s * sample_rate) + nf],
+                      sample_rate, settings)
+        if head.size <= 2 * nf:       # too short to be an attack: play the sustain
+            return _faded_in(sustain[:n], nf), sustain[n - nf:n].copy()
+        a = head.size - nf
+        shift = align_offset(head[a:], sustain[a:a + nf + lag], lag)
+        voice = crossfade(head, sustain[a + shift:n + shift], nf)
+        return voice, voice[n - nf:].copy()
+    k = min(prev_tail.size, n)
+    shift = align_offset(prev_tail[:k], sustain[: k + lag], lag)
+    voice = sustain[shift: shift + n]
+    voice[:k] *= fade_curve(k)
+    return voice, voice[n - nf:].copy()
+
+
+def _faded_in(x: np.ndarray, nf: int) -> np.ndarray:
+    k = min(nf, x.size)
+    x = x.copy()
+    x[:k] *= fade_curve(k)
+    return x
+
+
+def render_notes(model: CwsModel, notes: pd.DataFrame, n_total: int, sample_rate: int, *,
+                 seed: int = 0, settings: SynthesisSettings | None = None,
+                 progress: bool = False) -> np.ndarray:
+    """Mix every note of ``notes`` into ``n_total`` samples.
+
+    ``notes`` is :func:`synth.cws.notes.action_notes`'s table.
+
+    Returns
+    -------
+    np.ndarray [shape=(n_total,)], float64
+    """
+    settings = settings or SynthesisSettings()
+    notes = notes.reset_index(drop=True).copy()
+    notes["velocity"], notes["gain_db"] = velocity_of(notes["bow_speed"], notes["bow_force"])
+    if "velocity" in model.inputs:            # the model learnt the dynamics itself
+        notes["gain_db"] = 0.0
+    out = np.zeros(n_total)
+    nf = int(round(settings.fade_s * sample_rate))
+    tail = None
+    for i in tqdm(range(len(notes)), unit="note", disable=not progress):
+        n0 = int(round(notes.at[i, "start_s"] * sample_rate))
+        n1 = min(int(round(notes.at[i, "end_s"] * sample_rate)), n_total)
+        if n1 - n0 < 2 * nf or n0 >= n_total:
+            continue
+        legato = tail if (i > 0 and not notes.at[i, "bow_change"]) else None
+        voice, raw_tail = _voice(model, notes, i, n1 - n0 + nf, legato, sample_rate,
+                                 np.random.default_rng([seed, i]), settings)
+        voice[voice.size - nf:] *= 1.0 - fade_curve(nf)
+        m = min(voice.size, n_total - n0)
+        out[n0:n0 + m] += voice[:m]
+        tail = raw_tail
+    return out
+
+
+__all__ = ["SynthesisSettings", "attack", "harmonic", "render_notes", "velocity_of"]
