@@ -1,4 +1,4 @@
-"""Build an audio-frame database from annotated real recordings, in parallel and resumably.
+r"""Build an audio-frame database from annotated real recordings, in parallel and resumably.
 
 Layout (see :mod:`data_schemas.audio_frames`)::
 
@@ -20,8 +20,8 @@ Examples
 >>> t = np.arange(sr) / sr
 >>> sf.write(tmp / "a4.wav", 0.3 * np.sin(2 * np.pi * 440 * t), sr)
 >>> _ = (tmp / "notes").mkdir(), (tmp / "alignments").mkdir()
->>> _ = (tmp / "notes" / "a4.csv").write_text("onset,offset,pitch,velocity\\n0,12,69,64\\n")
->>> _ = (tmp / "alignments" / "a4.csv").write_text("start,end\\n0.1,0.9\\n")
+>>> _ = (tmp / "notes" / "a4.csv").write_text("onset,offset,pitch,velocity\n0,12,69,64\n")
+>>> _ = (tmp / "alignments" / "a4.csv").write_text("start,end\n0.1,0.9\n")
 >>> m = build_audio_database([tmp], tmp / "db", workers=1, progress=False)
 >>> m["n_frames"], sorted(m["recordings"])
 (87, ['a4'])

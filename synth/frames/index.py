@@ -133,8 +133,10 @@ def build_index(frames, *, seed: int = 0) -> FrameIndex:
 
 
 def load_index(db, *, seed: int = 0) -> FrameIndex:
-    """The cached index of an :class:`~data_schemas.audio_frames.AudioDatabase` (built and
-    written beside it, atomically, when missing or stale)."""
+    """The cached index of an :class:`~data_schemas.audio_frames.AudioDatabase`.
+
+    Built and written beside the database (atomically) when missing or stale.
+    """
     key = database_key(db.manifest)
     path = Path(db.root) / INDEX_NAME
     if path.is_file():

@@ -30,8 +30,11 @@ BRIGHTNESS_EXPONENT = 0.25
 
 @dataclass(frozen=True)
 class Targets:
-    """Per-frame targets: ``times`` (s), ``f0`` (Hz), ``energy_db``, ``centroid_hz`` and
-    ``sounding`` (bool); unsounding frames hold NaN features."""
+    """Per-frame targets of a performance.
+
+    ``times`` (s), ``f0`` (Hz), ``energy_db``, ``centroid_hz`` and ``sounding`` (bool);
+    unsounding frames hold NaN features.
+    """
 
     times: np.ndarray
     f0: np.ndarray
