@@ -107,3 +107,32 @@ def test_the_index_is_built_once_and_rebuilt_when_the_database_changes(db, tmp_p
     (copy / "manifest.json").write_text(manifest.replace('"digest": "', '"digest": "x'))
     get_engine("frames", "violin", audio_db=copy)
     assert (copy / INDEX_NAME).read_bytes() != cache.read_bytes()
+
+
+def test_cli_builds_the_database_and_renders_a_score_with_frames(tmp_path, capsys):
+    import soundfile as sf
+    from _notation_score import write_score
+
+    import pipelines.cli.main as cli
+
+    root = write_dataset(tmp_path / "data")
+    code = cli.main(["build-db", "--audio", str(root), "-o", str(tmp_path / "db"),
+                     "--workers", "1"])
+    out, err = capsys.readouterr()
+    assert code == 0 and "audio-frame database generation 1" in out, err
+    code = cli.main(["engines"])
+    assert "frames" in capsys.readouterr().out
+    (tmp_path / "score").mkdir()
+    score = write_score(tmp_path / "score")
+    wav = tmp_path / "x.wav"
+    code = cli.main(["render", str(score), "--method", "rules", "--engine", "frames",
+                     "--audio-db", str(tmp_path / "db"), "--end-measure", "2", "-o", str(wav),
+                     "--quiet", "--transpose-octaves"])
+    _, err = capsys.readouterr()
+    assert code == 0, err
+    y, sr = sf.read(wav)
+    assert sr == SR and np.isfinite(y).all() and np.abs(y).max() > 0.01
+    # a missing database is one line naming the option, exit 2
+    code = cli.main(["render", str(score), "--engine", "frames", "--audio-db",
+                     str(tmp_path / "nowhere"), "-o", str(wav), "--quiet"])
+    assert code == 2 and "--audio-db" in capsys.readouterr().err
