@@ -151,9 +151,29 @@ def leave_one_out(recs: list[recordings.Recording], left_out: str, root: Path) -
     return data
 
 
+def _reuse_analyses(root: Path, db: Path) -> None:
+    """Copy the per-recording tables of earlier leave-one-out databases into ``db``.
+
+    The build resumes from them (same recording, same settings: same file), so each
+    database analyses only the recording the earlier ones left out.
+    """
+    import shutil
+
+    for other in sorted(root.glob("db-without-*")):
+        for sub in ("frames", "notes"):
+            for f in (other / sub).glob("*.parquet"):
+                (db / sub).mkdir(parents=True, exist_ok=True)
+                if not (db / sub / f.name).exists():
+                    shutil.copy2(f, db / sub / f.name)
+
+
 def frames_renderer(args: argparse.Namespace, config: dict, recs: list[recordings.Recording]):
     """The ``frames`` source: rules' actions on a database without the measured recording."""
+    import atexit
+    import shutil
+
     root = Path(tempfile.mkdtemp(prefix="arco-frames-"))
+    atexit.register(shutil.rmtree, root, ignore_errors=True)
 
     def frames(table, midi, n):
         from gesture_db.audio_build import build_audio_database
@@ -166,7 +186,8 @@ def frames_renderer(args: argparse.Namespace, config: dict, recs: list[recording
             raise baselines.PeerMissingError("frames needs at least two recordings")
         t0 = time.perf_counter()
         db = root / f"db-without-{name}"
-        build_audio_database([leave_one_out(recs, name, root)], db, progress=False)
+        _reuse_analyses(root, db)
+        built = build_audio_database([leave_one_out(recs, name, root)], db, progress=False)
         t1 = time.perf_counter()
         actions = render(read_score(midi), config, parts=[0], seed=args.seed, audio=False,
                          sample_rate=SAMPLE_RATE, transpose_octaves=True,
@@ -179,7 +200,8 @@ def frames_renderer(args: argparse.Namespace, config: dict, recs: list[recording
         t3 = time.perf_counter()
         again, _ = engine.render(actions, tail=0.5)
         EXTRAS.setdefault("frames", {})[name] = {
-            "db_recordings": len(recs) - 1, "db_build_s": t1 - t0, "setup_s": t2 - t1,
+            "db_recordings": len(recs) - 1, "db_recordings_resumed": built["resumed_recordings"],
+            "db_build_s": t1 - t0, "setup_s": t2 - t1,
             "render_s": t3 - t2, "search_s": engine.search_seconds,
             "real_time_factor": (audio.size / SAMPLE_RATE) / (t3 - t2),
             "bit_identical": bool(audio.tobytes() == again.tobytes()),
