@@ -12,6 +12,11 @@ notes of the first ``--seconds`` are played at their aligned times by
 - ``sawtooth``: an additive band-limited sawtooth per note (the baseline);
 - ``feedback`` with ``--models DIR``, ``sampling`` (``sampling-open`` without models) with
   ``--db DB``;
+- ``frames``: the rules' actions played by the ``frames`` engine on an audio-frame database
+  built (into a temporary folder) from the *other* recordings: leave one recording out.
+  Its extra figures (``frames`` in the report, per recording and mean): database build
+  time, search and render time, real-time factor, pitch error on sustained stretches
+  against the actions' pitch (the rules' source gets the same figure), clicks;
 
 and every source, the recording (``real``) included, is measured the same way by
 :func:`pipelines.reports.timbre.measure` (44.1 kHz mono, loudness-normalised, up to 14 kHz):
@@ -47,9 +52,11 @@ from pipelines.reports import baselines, recordings, timbre, vibrato  # noqa: E4
 SAMPLE_RATE = 44100
 VIBRATO = ("vibrato_share", "vibrato_extent_cents", "vibrato_rate_hz",
            "intonation_spread_cents")
-SOURCES = ("real", "rules", "fluidr3", "sawtooth")
+SOURCES = ("real", "rules", "fluidr3", "sawtooth", "frames")
 FIGURES = ("mfcc_frechet", "centroid_hz", "h6_10_db", "h11_20_db", "flatness_db", "hnr_db",
-           *VIBRATO)
+           *VIBRATO, "click_ratio", "click_p999")
+#: Figures of the engines playing actions, per source and recording (filled while rendering).
+EXTRAS: dict[str, dict[str, dict]] = {}
 
 
 def say(*parts: Any) -> None:
@@ -75,7 +82,8 @@ def given_recordings(triples: list[list[str]]) -> list[recordings.Recording]:
     return out
 
 
-def make_renderers(args: argparse.Namespace) -> dict[str, Any]:
+def make_renderers(args: argparse.Namespace,
+                   recs: list[recordings.Recording] | None = None) -> dict[str, Any]:
     """Source name -> function(table, midi_path, n_samples) -> mono audio."""
     from pipelines.perform.config import load_config
 
@@ -85,8 +93,11 @@ def make_renderers(args: argparse.Namespace) -> dict[str, Any]:
         from pipelines.methods.rules import render
         from pipelines.score import read_score
 
-        return render(read_score(midi), config, parts=[0], seed=args.seed,
-                      sample_rate=SAMPLE_RATE, transpose_octaves=True, progress=False).audio
+        res = render(read_score(midi), config, parts=[0], seed=args.seed,
+                     sample_rate=SAMPLE_RATE, transpose_octaves=True, progress=False)
+        extra = EXTRAS.setdefault("rules", {}).setdefault(table.attrs["recording"], {})
+        extra.update(pitch_figures(res.audio, res.parts[0].performance.actions))
+        return res.audio
 
     def method(name, database=None, models=None):
         def play(table, midi, n):
@@ -109,7 +120,95 @@ def make_renderers(args: argparse.Namespace) -> dict[str, Any]:
 
         variant = "sampling" if args.models else "sampling-open"
         out[variant] = method(variant, database=open_database(args.db), models=args.models)
+    if "frames" in args.sources:
+        out["frames"] = frames_renderer(args, config, recs or [])
     return {k: v for k, v in out.items() if k in args.sources}
+
+
+def pitch_figures(audio: np.ndarray, actions) -> dict[str, Any]:
+    """Pitch error of a render against the pitch its actions ask for (sustained stretches)."""
+    from pipelines.reports.joins import pitch_error_cents
+    from synth.frames.targets import PitchProfile, derive_targets
+
+    flat = PitchProfile(np.array([0.0, 127.0]), np.zeros(2), np.full(2, 1000.0), (-99.0, 0.0))
+    tg = derive_targets(actions, "violin", 512 / SAMPLE_RATE, flat)
+    return {f"pitch_{k}": v for k, v in pitch_error_cents(audio, SAMPLE_RATE, tg.times,
+                                                          tg.f0).items()}
+
+
+def leave_one_out(recs: list[recordings.Recording], left_out: str, root: Path) -> Path:
+    """A folder laid out like bach-violin with every recording but ``left_out`` (links)."""
+    data = root / f"without-{left_out}"
+    for sub in ("audio", "notes", "alignments"):
+        (data / sub).mkdir(parents=True, exist_ok=True)
+    for r in recs:
+        if r.name == left_out:
+            continue
+        for src, sub in ((r.audio, "audio"), (r.notes, "notes"), (r.alignment, "alignments")):
+            link = data / sub / src.name
+            if not link.exists():
+                link.symlink_to(src.resolve())
+    return data
+
+
+def _reuse_analyses(root: Path, db: Path) -> None:
+    """Copy the per-recording tables of earlier leave-one-out databases into ``db``.
+
+    The build resumes from them (same recording, same settings: same file), so each
+    database analyses only the recording the earlier ones left out.
+    """
+    import shutil
+
+    for other in sorted(root.glob("db-without-*")):
+        for sub in ("frames", "notes"):
+            for f in (other / sub).glob("*.parquet"):
+                (db / sub).mkdir(parents=True, exist_ok=True)
+                if not (db / sub / f.name).exists():
+                    shutil.copy2(f, db / sub / f.name)
+
+
+def frames_renderer(args: argparse.Namespace, config: dict, recs: list[recordings.Recording]):
+    """The ``frames`` source: rules' actions on a database without the measured recording."""
+    import atexit
+    import shutil
+
+    root = Path(tempfile.mkdtemp(prefix="arco-frames-"))
+    atexit.register(shutil.rmtree, root, ignore_errors=True)
+
+    def frames(table, midi, n):
+        from gesture_db.audio_build import build_audio_database
+        from pipelines.methods.rules import render
+        from pipelines.score import read_score
+        from synth.engines import get_engine
+
+        name = table.attrs["recording"]
+        if len(recs) < 2:
+            raise baselines.PeerMissingError("frames needs at least two recordings")
+        t0 = time.perf_counter()
+        db = root / f"db-without-{name}"
+        _reuse_analyses(root, db)
+        built = build_audio_database([leave_one_out(recs, name, root)], db, progress=False)
+        t1 = time.perf_counter()
+        actions = render(read_score(midi), config, parts=[0], seed=args.seed, audio=False,
+                         sample_rate=SAMPLE_RATE, transpose_octaves=True,
+                         progress=False).parts[0].performance.actions
+        engine = get_engine("frames", "violin", sample_rate=SAMPLE_RATE, seed=args.seed,
+                            audio_db=db)
+        engine.render(actions.iloc[:2])  # decode the audio, compile: not part of a render
+        t2 = time.perf_counter()
+        audio, _ = engine.render(actions, tail=0.5)
+        t3 = time.perf_counter()
+        again, _ = engine.render(actions, tail=0.5)
+        EXTRAS.setdefault("frames", {})[name] = {
+            "db_recordings": len(recs) - 1, "db_recordings_resumed": built["resumed_recordings"],
+            "db_build_s": t1 - t0, "setup_s": t2 - t1,
+            "render_s": t3 - t2, "search_s": engine.search_seconds,
+            "real_time_factor": (audio.size / SAMPLE_RATE) / (t3 - t2),
+            "bit_identical": bool(audio.tobytes() == again.tobytes()),
+            **pitch_figures(audio, actions)}
+        return audio
+
+    return frames
 
 
 def failed(reason: str) -> dict[str, Any]:
@@ -160,6 +259,8 @@ def measure_recording(rec: recordings.Recording, args: argparse.Namespace, rende
     keep(args, rec, "real", real_audio, table)
     real = timbre.measure(real_audio, SAMPLE_RATE, table)
     real.figures.update(vibrato.vibrato_figures(real_audio, SAMPLE_RATE, table))
+    real.figures.update(clicks(real_audio))
+    table.attrs["recording"] = rec.name
     result: dict[str, Any] = {
         "audio": str(rec.audio), "notes": len(table), "dropped_notes": table.attrs["dropped"],
         "figures": {"real": {"mfcc_frechet": None, **real.figures}},
@@ -176,6 +277,7 @@ def measure_recording(rec: recordings.Recording, args: argparse.Namespace, rende
         keep(args, rec, name, audio, table)
         m = timbre.measure(audio, SAMPLE_RATE, table)
         m.figures.update(vibrato.vibrato_figures(audio, SAMPLE_RATE, table))
+        m.figures.update(clicks(audio))
         result["figures"][name] = {"mfcc_frechet": timbre.frechet_distance(m.mfcc, real.mfcc),
                                    **m.figures}
         result["ltas_db"][name] = m.ltas_db
@@ -184,6 +286,14 @@ def measure_recording(rec: recordings.Recording, args: argparse.Namespace, rende
             f"{m.figures['centroid_hz'] or float('nan'):.0f} Hz "
             f"({result['render_seconds'][name]:.1f} s)")
     return result, real.mfcc
+
+
+def clicks(audio: np.ndarray) -> dict[str, float]:
+    """Largest (and 99.9th percentile) sample jump over the local RMS slope."""
+    from pipelines.reports.joins import click_ratio
+
+    top, p999 = click_ratio(audio)
+    return {"click_ratio": top, "click_p999": p999}
 
 
 def performer(name: str) -> str:
@@ -226,6 +336,18 @@ def mean_over(per: dict[str, dict]) -> dict[str, Any]:
     return {"figures": figures, "ltas_diff_db": ltas}
 
 
+def mean_extras(per_rec: dict[str, dict]) -> dict[str, Any]:
+    """Each numeric engine figure averaged over the recordings."""
+    keys = dict.fromkeys(k for r in per_rec.values() for k in r)
+    out = {}
+    for k in keys:
+        vals = [r[k] for r in per_rec.values() if isinstance(r.get(k), int | float)
+                and not isinstance(r.get(k), bool)]
+        if vals:
+            out[k] = float(np.mean(vals))
+    return out
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -262,7 +384,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     recs = given_recordings(args.recording) if args.recording else shared_recordings()
     for rec in recs:  # every input checked before any render
         read_table(rec, args.seconds)
-    renderers = make_renderers(args)
+    renderers = make_renderers(args, recs)
     per: dict[str, dict] = {}
     frames: dict[str, np.ndarray] = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -282,6 +404,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "recordings": per,
         "mean": mean_over(per),
         "floor": floors,
+        "engines": {src: {"recordings": per_rec, "mean": mean_extras(per_rec)}
+                    for src, per_rec in EXTRAS.items()},
         "elapsed_s": time.perf_counter() - started,
     })
 

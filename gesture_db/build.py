@@ -233,33 +233,56 @@ def _source_entry(stats: dict) -> dict:
 def _run(pending: list[tuple[Source, str]], params: BuildParams, workers: int | None,
          scheduler) -> Iterator[tuple[str, tuple]]:
     """Yield (hash, result) per source as results arrive, in a deterministic manner."""
-    if not pending:
+    jobs = [(dig, (src, params, dig)) for src, dig in pending]
+    yield from run_parallel(process_source, jobs, workers, scheduler)
+
+
+def run_parallel(task: Callable, jobs: list[tuple[str, tuple]], workers: int | None,
+                 scheduler=None) -> Iterator[tuple[str, object]]:
+    """Yield ``(key, task(*args))`` per job, in parallel (used by every database build).
+
+    Parameters
+    ----------
+    task : callable
+        A module-level function (it is pickled to worker processes).
+    jobs : list of (str, tuple)
+        Key and positional arguments of each call.
+    workers : int, optional
+        Local worker processes (default: one per CPU); 1 runs in-process.
+    scheduler : distributed.Client, optional
+        Run on a dask.distributed cluster instead (results in completion order).
+
+    Examples
+    --------
+    >>> list(run_parallel(pow, [("a", (2, 3)), ("b", (3, 2))], workers=1))
+    [('a', 8), ('b', 9)]
+    """
+    if not jobs:
         return
     if scheduler is not None:
-        yield from _run_distributed(pending, params, scheduler)
+        yield from _run_distributed(task, jobs, scheduler)
         return
     workers = workers or os.cpu_count() or 1
-    if workers <= 1 or len(pending) == 1:
-        for src, dig in pending:
-            yield dig, process_source(src, params, dig)
+    if workers <= 1 or len(jobs) == 1:
+        for key, args in jobs:
+            yield key, task(*args)
         return
     import dask
 
     batch = 2 * workers
     with process_pool(workers) as pool:
-        for start in range(0, len(pending), batch):
-            chunk = pending[start:start + batch]
-            tasks = [dask.delayed(process_source)(src, params, dig) for src, dig in chunk]
+        for start in range(0, len(jobs), batch):
+            chunk = jobs[start:start + batch]
+            tasks = [dask.delayed(task)(*args) for _key, args in chunk]
             outs = dask.compute(*tasks, scheduler="processes", pool=pool)
-            for (_src, dig), res in zip(chunk, outs, strict=True):
-                yield dig, res
+            for (key, _args), res in zip(chunk, outs, strict=True):
+                yield key, res
 
 
-def _run_distributed(pending, params, scheduler) -> Iterator[tuple[str, tuple]]:
+def _run_distributed(task, jobs, scheduler) -> Iterator[tuple[str, object]]:
     from distributed import as_completed
 
-    futures = {scheduler.submit(process_source, src, params, dig, pure=False): dig
-               for src, dig in pending}
+    futures = {scheduler.submit(task, *args, pure=False): key for key, args in jobs}
     for fut in as_completed(futures):
         yield futures[fut], fut.result()
         fut.release()
@@ -316,4 +339,4 @@ def _segmentation_summary(stats: list[dict]) -> dict:
             "notes_found_share": found / n_true, "n_true": n_true}
 
 
-__all__ = ["BuildParams", "build_database", "process_source"]
+__all__ = ["BuildParams", "build_database", "process_source", "run_parallel"]

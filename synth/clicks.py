@@ -40,7 +40,9 @@ def local_rms_slope(audio: np.ndarray, sample_rate: int, *, window_s: float = 0.
     """
     d = np.diff(np.asarray(audio, dtype=np.float64))
     w = max(3, int(round(window_s * sample_rate)) | 1)
-    power = np.convolve(d * d, np.ones(w) / w, mode="same")
+    box = np.ones(w)
+    # the mean over the samples inside the window (fewer at the ends: no zero padding)
+    power = np.convolve(d * d, box, mode="same") / np.convolve(np.ones(d.size), box, mode="same")
     return np.sqrt(np.maximum(power, 0.0))
 
 

@@ -150,6 +150,13 @@ def _cws(instrument: str = "violin", **settings: Any) -> Engine:
     return CwsEngine(instrument, **settings)
 
 
+def _frames(instrument: str = "violin", **settings: Any) -> Engine:
+    """The frame-concatenation engine, imported when first built."""
+    from synth.frames.engine import FramesEngine
+
+    return FramesEngine(instrument, **settings)
+
+
 def _builtin() -> None:
     if "modal" not in _REGISTRY:
         register_engine("modal", _modal,
@@ -157,6 +164,32 @@ def _builtin() -> None:
     if "cws" not in _REGISTRY:
         register_engine("cws", _cws, "cluster-weighted sampling of recorded violin audio "
                         "(needs audio_db; Schoner et al. 2000)")
+    if "frames" not in _REGISTRY:
+        register_engine("frames", _frames,
+                        "frames of real recordings chosen by a Viterbi search and overlap-"
+                        "added (needs --audio-db from arco build-db --audio)")
+
+
+@dataclass(frozen=True)
+class EngineChoice:
+    """An engine name with its options, passed wherever an engine name is accepted.
+
+    Methods and renderers hand ``engine`` on to :func:`get_engine` untouched, so options an
+    engine needs (``frames``, ``cws``: ``audio_db``) travel with the name.
+
+    Examples
+    --------
+    >>> str(EngineChoice("modal", {"body": None}))
+    'modal'
+    >>> get_engine(EngineChoice("modal", {"body": None}), "violin").n_strings
+    4
+    """
+
+    name: str
+    options: Mapping[str, Any]
+
+    def __str__(self) -> str:
+        return self.name
 
 
 def engine_names() -> list[str]:
@@ -176,14 +209,15 @@ def describe_engines() -> list[EngineEntry]:
     return [_REGISTRY[n] for n in engine_names()]
 
 
-def get_engine(name: str = DEFAULT_ENGINE, instrument: str = "violin", *,
+def get_engine(name: str | EngineChoice = DEFAULT_ENGINE, instrument: str = "violin", *,
                sample_rate: int = 44100, seed: int = 0, **options: Any) -> Engine:
     """Build engine ``name`` for ``instrument``.
 
     Parameters
     ----------
-    name : str
-        A registered engine (see :func:`engine_names`).
+    name : str or EngineChoice
+        A registered engine (see :func:`engine_names`), or one with its options (they
+        override ``options`` given here).
     instrument : {"violin", "viola", "cello"}
     sample_rate : {44100, 48000}, Hz
     seed : int
@@ -207,6 +241,9 @@ def get_engine(name: str = DEFAULT_ENGINE, instrument: str = "violin", *,
     >>> violin.name, violin.n_strings
     ('violin', 4)
     """
+    if isinstance(name, EngineChoice):
+        options = {**options, **name.options}
+        name = name.name
     names = engine_names()
     if name not in _REGISTRY:
         raise ParameterError(f"engine={name!r} is not one of {names}")

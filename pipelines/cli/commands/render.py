@@ -34,6 +34,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "models, else rules")
     p.add_argument("--engine", choices=engine_names(), default=DEFAULT_ENGINE,
                    help="synthesis engine (arco engines lists them)")
+    p.add_argument("--audio-db", metavar="DB",
+                   help="audio-frame database (arco build-db --audio) for --engine frames")
     p.add_argument("--db", metavar="DB",
                    help="gesture database (arco build-db) for sampling and sampling-open")
     p.add_argument("--models", metavar="DIR",
@@ -104,6 +106,17 @@ def _check(args: argparse.Namespace, method: str) -> None:
     check_methods([method], db=args.db, models=args.models, option="--method")
 
 
+def engine_choice(args: argparse.Namespace):
+    """``--engine`` with the options it takes from the command line (``--audio-db``)."""
+    from synth.engines import EngineChoice
+
+    if args.audio_db is None:
+        return args.engine
+    if not Path(args.audio_db).is_dir():
+        raise ParameterError(f"--audio-db {args.audio_db}: no such directory")
+    return EngineChoice(args.engine, {"audio_db": args.audio_db})
+
+
 def run(args: argparse.Namespace) -> int:
     """Read, play, write."""
     from pipelines.methods.render import render_score
@@ -111,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     method = choose_method(args)
     _check(args, method)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
-    output = render_score(args.score, method=method, engine=args.engine,
+    output = render_score(args.score, method=method, engine=engine_choice(args),
                           parts="all" if args.all_parts else args.part,
                           start_measure=args.start_measure, end_measure=args.end_measure,
                           movement=args.movement, seed=args.seed, sample_rate=args.sample_rate,

@@ -24,6 +24,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="instrument that plays")
     p.add_argument("--engine", choices=engine_names(), default=DEFAULT_ENGINE,
                    help="synthesis engine (arco engines lists them)")
+    p.add_argument("--audio-db", metavar="DB",
+                   help="audio-frame database (arco build-db --audio) for --engine frames")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the friction noise")
     p.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000),
                    help="audio sample rate in Hz")
@@ -42,6 +44,7 @@ def run(args: argparse.Namespace) -> int:
     """Read, render and write."""
     from data_schemas.actions import read_actions
     from pipelines.audio_io import write_audio
+    from pipelines.cli.commands.render import engine_choice
     from synth.render import render_actions
 
     output_file(args.output)
@@ -49,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     if actions.empty:
         raise ParameterError(f"{args.actions}: the actions table has no rows")
     body = None if args.body == "none" else args.body
-    audio = render_actions(actions, instrument=args.instrument, engine=args.engine,
+    audio = render_actions(actions, instrument=args.instrument, engine=engine_choice(args),
                            sample_rate=args.sample_rate, seed=args.seed,
                            oversample=args.oversample, body=body, body_seed=args.body_seed,
                            progress=not args.quiet and sys.stderr.isatty(),
