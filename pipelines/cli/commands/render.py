@@ -11,6 +11,7 @@ from data_schemas.errors import ParameterError
 from pipelines.cli.outputs import output_file
 from pipelines.cli.types import non_negative_int
 from pipelines.methods.registry import METHODS, check_methods, get_method
+from pipelines.mix.options import add_ensemble_arguments, ensemble_settings
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
 
@@ -67,6 +68,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     out.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000),
                      help="audio sample rate in Hz")
     out.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    add_ensemble_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -96,6 +98,12 @@ def _check(args: argparse.Namespace, method: str) -> None:
         if getattr(args, option):
             output_file(getattr(args, option), "-o" if option == "output" else f"--{option}")
     check_methods([method], db=args.db, models=args.models, option="--method")
+    mixing = [o for o in ("pan", "room", "rt60", "loudness", "mix_config")
+              if getattr(args, o, None) is not None]
+    if mixing and not args.all_parts:
+        raise ParameterError(f"--{mixing[0].replace('_', '-')} applies to the ensemble mix "
+                             "(add --all-parts)")
+    args.ensemble = ensemble_settings(args) if args.all_parts else None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -128,7 +136,9 @@ def _write(args: argparse.Namespace, output, variant: str, say) -> None:
     from pipelines.audio_io import write_audio
     from pipelines.reports.plots import plot_bowing
 
-    if args.output:
+    if args.output and args.all_parts:
+        _write_ensemble(args, output, variant, say)
+    elif args.output:
         path = write_audio(args.output, output.audio, args.sample_rate)
         say(f"wrote {path} ({output.audio.size / args.sample_rate:.1f} s, "
             f"{len(output.parts)} part(s), {variant})")
@@ -149,3 +159,17 @@ def _write(args: argparse.Namespace, output, variant: str, say) -> None:
                     title=f"{Path(args.score).name}: {first.part_name} ({first.instrument}), "
                           f"{variant}, skill {args.skill}", string_names=names)
         say(f"wrote {args.plot}")
+
+
+def _write_ensemble(args: argparse.Namespace, output, variant: str, say) -> None:
+    from pipelines.mix.ensemble_output import write_ensemble
+
+    room = args.ensemble["room"]
+    report = write_ensemble(output, args.output, sample_rate=args.sample_rate,
+                            ensemble=args.ensemble, progress=not args.quiet and sys.stderr.isatty())
+    where = "dry" if room["kind"] == "none" else f"hall, RT60 {room['rt60']:g} s"
+    say(f"wrote {args.output} (stereo, {report.seconds:.1f} s, {len(output.parts)} parts, "
+        f"{variant}, {where}; {report.loudness:.1f} LUFS, peak {report.peak_db:.1f} dBFS"
+        + (", limited by the peak ceiling" if report.limited else "") + ")")
+    for stem in report.stems:
+        say(f"wrote {stem} (stem: panned stereo, dry, at the master's gain)")

@@ -1,0 +1,53 @@
+"""Write an ensemble render: the stereo master in a room and the parts' stems beside it."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from pipelines.mix.config import part_pans
+from pipelines.mix.mixdown import MixReport, mixdown
+from pipelines.mix.wav_stream import audio_writer
+
+
+def stem_paths(output: str | os.PathLike, parts: list) -> list[Path]:
+    """``OUT-<index>-<instrument>.wav`` beside ``OUT.wav`` for each part.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as P
+    >>> [p.name for p in stem_paths("q/mix.wav", [P(part_index=0, instrument="violin")])]
+    ['mix-0-violin.wav']
+    """
+    base = Path(output)
+    return [base.with_name(f"{base.stem}-{p.part_index}-{p.instrument}{base.suffix}")
+            for p in parts]
+
+
+def write_ensemble(output, path: str | os.PathLike, *, sample_rate: int,
+                   ensemble: dict[str, Any], progress: bool = False) -> MixReport:
+    """Mix a :class:`~pipelines.methods.result.MethodOutput`'s parts into ``path``.
+
+    Each part's audio goes to a temporary mono file and is released from memory (its
+    ``audio`` and the output's mono mix become None), then :func:`mixdown` streams the
+    master and the stems (:func:`stem_paths`).
+
+    Returns
+    -------
+    MixReport
+    """
+    path = Path(path)
+    pans = part_pans(ensemble, len(output.parts))
+    output.audio = None
+    with tempfile.TemporaryDirectory(dir=path.absolute().parent, prefix=".parts-") as folder:
+        sources = []
+        for k, part in enumerate(output.parts):
+            source = Path(folder) / f"{k}.wav"
+            with audio_writer(source, sample_rate, 1) as out:
+                out.write(part.audio)
+            part.audio = None
+            sources.append(source)
+        return mixdown(sources, path, pans=pans, ensemble=ensemble,
+                       stems=stem_paths(path, output.parts), progress=progress)
