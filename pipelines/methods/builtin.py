@@ -50,6 +50,7 @@ def play_feedback(notes: pd.DataFrame, parts: list[int], *, config: dict[str, An
     """``feedback``: the rules' bowing, the listening controller chooses the force."""
     from pipelines.methods.feedback import render_feedback
     from pipelines.perform.rules import fermata_warp
+    from pipelines.perform.timing import player_warp
 
     warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
     rng = np.random.default_rng(seed)
@@ -59,7 +60,8 @@ def play_feedback(notes: pd.DataFrame, parts: list[int], *, config: dict[str, An
         name = instrument or str(part["instrument"].iloc[0])
         y, actions, diag, perf = render_feedback(
             part, config, models_dir=models, instrument=name, skill=skill, seed=seed,
-            sample_rate=sample_rate, transpose_octaves=transpose_octaves, warp=warp,
+            sample_rate=sample_rate, transpose_octaves=transpose_octaves,
+            warp=player_warp(warp, notes, index, seed=seed) if len(parts) > 1 else warp,
             rng=rng, diagnostics=diagnostics, engine=engine)
         out.append(PartOutput(index, str(part["part_name"].iloc[0]), name, y, actions,
                               perf.events, diag, part, perf.warnings))

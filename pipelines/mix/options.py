@@ -20,8 +20,8 @@ def add_ensemble_arguments(parser: argparse.ArgumentParser) -> None:
         "normalised to a loudness; stems OUT-<index>-<instrument>.wav (panned, dry) beside "
         "it; defaults in pipelines/mix/ensemble.toml")
     group.add_argument("--pan", metavar="P1,P2,...",
-                       help="pan position of each part in score order, -1 left .. 1 right "
-                            "(default -0.7,-0.25,0.25,0.7)")
+                       help="pan position of each part in score order, -1 left .. 1 right, "
+                            "written --pan=-0.7,-0.25,0.25,0.7 (the default)")
     group.add_argument("--room", choices=("hall", "none"),
                        help="synthesized hall (default) or none (dry)")
     group.add_argument("--rt60", type=float, metavar="S",
