@@ -20,7 +20,7 @@ from pipelines.methods.result import PartOutput
 def play_rules(notes: pd.DataFrame, parts: list[int], *, config: dict[str, Any],
                seed: int = 0, sample_rate: int = 44100, instrument: str | None = None,
                skill: int = 3, transpose_octaves: bool = False, diagnostics: bool = True,
-               progress: bool | None = False, engine: str = "modal",
+               progress: bool | None = False, engine: str = "modal", spool=None,
                **_: Any) -> list[PartOutput]:
     """``rules``: the performance rules plan every part, the engine plays it open loop."""
     from pipelines.methods.rules import render
@@ -35,6 +35,7 @@ def play_rules(notes: pd.DataFrame, parts: list[int], *, config: dict[str, Any],
             p.performance.actions, instrument=p.instrument, engine=engine,
             sample_rate=sample_rate, seed=seed, diagnostics=diagnostics,
             progress=bool(progress) and len(parts) == 1)
+        y = y if spool is None else spool.put(p.part_index, y)
         out.append(PartOutput(p.part_index, p.part_name, p.instrument, y,
                               p.performance.actions, p.performance.events, diag,
                               notes[notes["part_index"] == p.part_index],
@@ -46,7 +47,7 @@ def play_feedback(notes: pd.DataFrame, parts: list[int], *, config: dict[str, An
                   models=None, seed: int = 0, sample_rate: int = 44100,
                   instrument: str | None = None, skill: int = 3,
                   transpose_octaves: bool = False, diagnostics: bool = True,
-                  engine: str = "modal", **_: Any) -> list[PartOutput]:
+                  engine: str = "modal", spool=None, **_: Any) -> list[PartOutput]:
     """``feedback``: the rules' bowing, the listening controller chooses the force."""
     from pipelines.methods.feedback import render_feedback
     from pipelines.perform.rules import fermata_warp
@@ -63,6 +64,7 @@ def play_feedback(notes: pd.DataFrame, parts: list[int], *, config: dict[str, An
             sample_rate=sample_rate, transpose_octaves=transpose_octaves,
             warp=player_warp(warp, notes, index, seed=seed) if len(parts) > 1 else warp,
             rng=rng, diagnostics=diagnostics, engine=engine)
+        y = y if spool is None else spool.put(index, y)
         out.append(PartOutput(index, str(part["part_name"].iloc[0]), name, y, actions,
                               perf.events, diag, part, perf.warnings))
     return out

@@ -171,7 +171,8 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
                   config: dict[str, Any], database=None, models=None, seed: int = 0,
                   sample_rate: int = 44100, instrument: str | None = None, skill: int = 3,
                   transpose_octaves: bool = False, diagnostics: bool = True,
-                  progress: bool | None = False, engine: str = "modal") -> MethodOutput:
+                  progress: bool | None = False, engine: str = "modal",
+                  spool=None) -> MethodOutput:
     """Render the chosen parts of one score with one method and mix them.
 
     Parameters
@@ -204,6 +205,10 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
         Progress bars.
     engine : str
         Synthesis engine (:func:`synth.engines.engine_names`).
+    spool : pipelines.mix.spool.AudioSpool, optional
+        Keep each part's audio on disk as it is rendered (the built-in methods do it part
+        by part; any other method's parts are spooled when it returns); the parts' and the
+        mix's ``audio`` are then empty.
 
     Returns
     -------
@@ -218,7 +223,10 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
         notes, parts, config=config, database=database, models=models, seed=seed,
         sample_rate=sample_rate, instrument=instrument, skill=skill,
         transpose_octaves=transpose_octaves, diagnostics=diagnostics, progress=progress,
-        engine=engine)
+        engine=engine, **({} if spool is None else {"spool": spool}))
+    for part in out if spool is not None else []:
+        if part.audio.size or part.part_index not in spool.paths:
+            part.audio = spool.put(part.part_index, part.audio)
     seconds = time.perf_counter() - start
     return MethodOutput(method, stem, mix([p.audio for p in out]), out, seconds)
 

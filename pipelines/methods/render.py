@@ -22,7 +22,7 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
                  config: str | os.PathLike | dict[str, Any] | None = None,
                  db=None, models: str | os.PathLike | None = None,
                  search_config: str | os.PathLike | None = None, diagnostics: bool = False,
-                 progress: bool | None = False) -> MethodOutput:
+                 progress: bool | None = False, spool=None) -> MethodOutput:
     """Play a score (or a notes table) with one method on one engine.
 
     Parameters
@@ -58,12 +58,13 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
         Record the engine's per-hop contact diagnostics of every part.
     progress : bool, optional
         Progress bars (None: when stderr is a terminal).
+    spool : pipelines.mix.spool.AudioSpool, optional
+        Each part's audio to disk as it is rendered (its and the mix's ``audio`` empty).
 
     Returns
     -------
     MethodOutput
-        ``audio`` (float32, mono, the parts mixed) and per part its actions, note events,
-        diagnostics and warnings (``parts``).
+        ``audio`` (float32, mono, the parts mixed); per part its actions, events, diagnostics.
 
     Examples
     --------
@@ -92,7 +93,7 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
                          models=models, seed=seed, sample_rate=sample_rate,
                          instrument=instrument, skill=skill,
                          transpose_octaves=transpose_octaves, diagnostics=diagnostics,
-                         progress=progress, engine=engine)
+                         progress=progress, engine=engine, spool=spool)
 
 
 def _select(score, parts, start: int | None, end: int | None,

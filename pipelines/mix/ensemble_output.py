@@ -9,6 +9,7 @@ from typing import Any
 
 from pipelines.mix.config import part_pans
 from pipelines.mix.mixdown import MixReport, mixdown
+from pipelines.mix.spool import AudioSpool
 from pipelines.mix.wav_stream import audio_writer
 
 
@@ -27,12 +28,15 @@ def stem_paths(output: str | os.PathLike, parts: list) -> list[Path]:
 
 
 def write_ensemble(output, path: str | os.PathLike, *, sample_rate: int,
-                   ensemble: dict[str, Any], progress: bool = False) -> MixReport:
+                   ensemble: dict[str, Any], progress: bool = False,
+                   spool: AudioSpool | None = None) -> MixReport:
     """Mix a :class:`~pipelines.methods.result.MethodOutput`'s parts into ``path``.
 
-    Each part's audio goes to a temporary mono file and is released from memory (its
-    ``audio`` and the output's mono mix become None), then :func:`mixdown` streams the
-    master and the stems (:func:`stem_paths`).
+    The parts' audio is read from ``spool`` when they were rendered into one (the way
+    ``arco render --all-parts`` keeps memory flat); otherwise each part's audio goes to a
+    temporary mono file and is released from memory (its ``audio`` and the output's mono
+    mix become None). :func:`mixdown` then streams the master and the stems
+    (:func:`stem_paths`).
 
     Returns
     -------
@@ -41,6 +45,10 @@ def write_ensemble(output, path: str | os.PathLike, *, sample_rate: int,
     path = Path(path)
     pans = part_pans(ensemble, len(output.parts))
     output.audio = None
+    if spool is not None:
+        return mixdown([spool.path(p.part_index) for p in output.parts], path, pans=pans,
+                       ensemble=ensemble, stems=stem_paths(path, output.parts),
+                       progress=progress)
     with tempfile.TemporaryDirectory(dir=path.absolute().parent, prefix=".parts-") as folder:
         sources = []
         for k, part in enumerate(output.parts):

@@ -30,7 +30,8 @@ class _WavWriter:
 
     def write(self, block: np.ndarray) -> None:
         data = np.asarray(block, dtype="<f4").reshape(-1, self.channels)
-        self.handle.write(data.tobytes())
+        for start in range(0, data.shape[0], 1 << 16):  # no byte copy of a whole part
+            self.handle.write(data[start:start + (1 << 16)].tobytes())
         self.frames += data.shape[0]
 
     def close(self) -> None:

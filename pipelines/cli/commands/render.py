@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
@@ -113,6 +115,11 @@ def run(args: argparse.Namespace) -> int:
     method = choose_method(args)
     _check(args, method)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
+    with _spool(args) as spool:
+        return _play(args, method, say, render_score, spool)
+
+
+def _play(args: argparse.Namespace, method: str, say, render_score, spool) -> int:
     output = render_score(args.score, method=method, engine=args.engine,
                           parts="all" if args.all_parts else args.part,
                           start_measure=args.start_measure, end_measure=args.end_measure,
@@ -120,12 +127,27 @@ def run(args: argparse.Namespace) -> int:
                           instrument=args.instrument, skill=args.skill,
                           transpose_octaves=args.transpose_octaves, config=args.config,
                           db=args.db, models=args.models, diagnostics=bool(args.diagnostics),
-                          progress=False if args.quiet else None)
+                          progress=False if args.quiet else None, spool=spool)
     for part in output.parts:
         for warning in part.warnings:
             say(f"arco render: warning: {warning}")
+    args.spool = spool
     _write(args, output, method, say)
     return 0
+
+
+@contextlib.contextmanager
+def _spool(args: argparse.Namespace):
+    """With --all-parts -o: a temporary folder beside the output holding each part's audio."""
+    if not (args.all_parts and args.output):
+        yield None
+        return
+    from pipelines.mix.spool import AudioSpool
+
+    folder = Path(args.output).absolute().parent
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=folder, prefix=".parts-") as tmp:
+        yield AudioSpool(tmp, args.sample_rate)
 
 
 def _write(args: argparse.Namespace, output, variant: str, say) -> None:
@@ -166,7 +188,8 @@ def _write_ensemble(args: argparse.Namespace, output, variant: str, say) -> None
 
     room = args.ensemble["room"]
     report = write_ensemble(output, args.output, sample_rate=args.sample_rate,
-                            ensemble=args.ensemble, progress=not args.quiet and sys.stderr.isatty())
+                            ensemble=args.ensemble, spool=args.spool,
+                            progress=not args.quiet and sys.stderr.isatty())
     where = "dry" if room["kind"] == "none" else f"hall, RT60 {room['rt60']:g} s"
     say(f"wrote {args.output} (stereo, {report.seconds:.1f} s, {len(output.parts)} parts, "
         f"{variant}, {where}; {report.loudness:.1f} LUFS, peak {report.peak_db:.1f} dBFS"
