@@ -6,7 +6,9 @@ Each measurement runs in a fresh Python process and reports its ``ru_maxrss``:
   parts panned, the hall, the loudness pass, master and stems written) on four mono WAVs of
   the given length (noise-like tones, written block by block first);
 * ``render``: ``render_score`` of a synthetic quartet (four parts of one-second notes, the
-  rules on the modal engine) plus the ensemble mix, as ``arco render --all-parts`` does.
+  rules on the modal engine) spooling each part to disk, plus the ensemble mix, as
+  ``arco render --all-parts`` does; ``render-held`` the same with every part's audio kept
+  in memory until the mix (how it was before, and what a method that cannot spool costs).
 
 The target (issue 16): a 10-minute render within 1.5x of a 10-second one, an 11.5-minute
 quartet movement with ``--all-parts`` under 600 MB.
@@ -78,11 +80,14 @@ def _child(kind: str, seconds: float, folder: Path) -> dict:
     else:
         from pipelines.methods.render import render_score
         from pipelines.mix.ensemble_output import write_ensemble
+        from pipelines.mix.spool import AudioSpool
 
         base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        output = render_score(_quartet_notes(seconds), method="rules", parts="all", seed=0)
+        spool = AudioSpool(folder, rate) if kind == "render" else None  # as arco render does
+        output = render_score(_quartet_notes(seconds), method="rules", parts="all", seed=0,
+                              spool=spool)
         report = write_ensemble(output, folder / "mix.wav", sample_rate=rate,
-                                ensemble=load_ensemble())
+                                ensemble=load_ensemble(), spool=spool)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return {"kind": kind, "music_s": seconds, "audio_s": round(report.seconds, 2),
             "peak_rss_mb": round(peak, 1), "rss_before_work_mb": round(base, 1),
@@ -115,19 +120,23 @@ def main() -> int:
             print(json.dumps(_child(args.child[0], float(args.child[1]), Path(folder))))
         return 0
     runs = [measure("mix", float(s)) for s in args.mix_seconds.split(",") if s]
-    runs += [measure("render", float(s)) for s in args.render_seconds.split(",") if s]
+    runs += [measure(kind, float(s)) for kind in ("render", "render-held")
+             for s in args.render_seconds.split(",") if s]
     mix = [r for r in runs if r["kind"] == "mix"]
     result = {"runs": runs, "target_ratio": TARGET_RATIO, "target_quartet_mb": TARGET_QUARTET_MB}
     if len(mix) > 1:
         result["mix_ratio_longest_to_shortest"] = round(
             mix[-1]["peak_rss_mb"] / mix[0]["peak_rss_mb"], 3)
-    render = [r for r in runs if r["kind"] == "render"]
-    if len(render) > 1:
-        slope = (render[-1]["peak_rss_mb"] - render[0]["peak_rss_mb"]) / (
-            render[-1]["music_s"] - render[0]["music_s"])
-        result["render_mb_per_music_s"] = round(slope, 3)
-        result["render_690s_quartet_mb_extrapolated"] = round(
-            render[0]["peak_rss_mb"] + slope * (690 - render[0]["music_s"]), 1)
+    for kind in ("render", "render-held"):
+        render = [r for r in runs if r["kind"] == kind]
+        if len(render) > 1:
+            slope = (render[-1]["peak_rss_mb"] - render[0]["peak_rss_mb"]) / (
+                render[-1]["music_s"] - render[0]["music_s"])
+            result[f"{kind}_mb_per_music_s"] = round(slope, 3)
+            result[f"{kind}_690s_quartet_mb_extrapolated"] = round(
+                render[0]["peak_rss_mb"] + slope * (690 - render[0]["music_s"]), 1)
+            result[f"{kind}_ratio_longest_to_shortest"] = round(
+                render[-1]["peak_rss_mb"] / render[0]["peak_rss_mb"], 3)
     if args.json:
         print(json.dumps(result, indent=2))
     else:
