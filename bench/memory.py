@@ -8,7 +8,8 @@ Each measurement runs in a fresh Python process and reports its ``ru_maxrss``:
 * ``render``: ``render_score`` of a synthetic quartet (four parts of one-second notes, the
   rules on the modal engine) spooling each part to disk, plus the ensemble mix, as
   ``arco render --all-parts`` does; ``render-held`` the same with every part's audio kept
-  in memory until the mix (how it was before, and what a method that cannot spool costs).
+  in memory until the mix (how it was before, and what a method that cannot spool costs);
+  ``solo``: one part (violin I) rendered and written as a mono WAV, as ``arco render -o``.
 
 The target (issue 16): a 10-minute render within 1.5x of a 10-second one, an 11.5-minute
 quartet movement with ``--all-parts`` under 600 MB.
@@ -77,6 +78,15 @@ def _child(kind: str, seconds: float, folder: Path) -> dict:
         report = mixdown(sources, folder / "mix.wav", pans=[-0.7, -0.25, 0.25, 0.7],
                          ensemble=load_ensemble(),
                          stems=[folder / f"stem{k}.wav" for k in range(4)])
+    elif kind == "solo":
+        from pipelines.audio_io import write_audio
+        from pipelines.methods.render import render_score
+
+        base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        output = render_score(_quartet_notes(seconds), method="rules", parts=0, seed=0)
+        write_audio(folder / "solo.wav", output.audio, rate)
+        report = argparse.Namespace(seconds=output.audio.size / rate, loudness=float("nan"),
+                                    peak_db=float("nan"))
     else:
         from pipelines.methods.render import render_score
         from pipelines.mix.ensemble_output import write_ensemble
@@ -113,6 +123,8 @@ def main() -> int:
                         help="lengths of the mix-only runs, s")
     parser.add_argument("--render-seconds", default="10,40",
                         help="lengths of the full quartet renders, s")
+    parser.add_argument("--solo-seconds", default="10,600",
+                        help="lengths of the single-part renders, s")
     parser.add_argument("--child", nargs=2, metavar=("KIND", "SECONDS"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -122,12 +134,13 @@ def main() -> int:
     runs = [measure("mix", float(s)) for s in args.mix_seconds.split(",") if s]
     runs += [measure(kind, float(s)) for kind in ("render", "render-held")
              for s in args.render_seconds.split(",") if s]
+    runs += [measure("solo", float(s)) for s in args.solo_seconds.split(",") if s]
     mix = [r for r in runs if r["kind"] == "mix"]
     result = {"runs": runs, "target_ratio": TARGET_RATIO, "target_quartet_mb": TARGET_QUARTET_MB}
     if len(mix) > 1:
         result["mix_ratio_longest_to_shortest"] = round(
             mix[-1]["peak_rss_mb"] / mix[0]["peak_rss_mb"], 3)
-    for kind in ("render", "render-held"):
+    for kind in ("render", "render-held", "solo"):
         render = [r for r in runs if r["kind"] == kind]
         if len(render) > 1:
             slope = (render[-1]["peak_rss_mb"] - render[0]["peak_rss_mb"]) / (
