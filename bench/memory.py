@@ -2,7 +2,7 @@
 
 Each measurement runs in a fresh Python process and reports its ``ru_maxrss``:
 
-* ``mix``: the streaming ensemble mix alone (:func:`pipelines.mix.mixdown.mixdown`: four
+* ``mix``: the streaming ensemble mix alone (:func:`pipelines.ensemble.mixdown.mixdown`: four
   parts panned, the hall, the loudness pass, master and stems written) on four mono WAVs of
   the given length (noise-like tones, written block by block first);
 * ``render``: ``render_score`` of a synthetic quartet (four parts of one-second notes, the
@@ -58,13 +58,13 @@ def _quartet_notes(seconds: float):
 def _child(kind: str, seconds: float, folder: Path) -> dict:
     import numpy as np
 
-    from pipelines.mix.config import load_ensemble
-    from pipelines.mix.wav_stream import audio_writer
+    from pipelines.ensemble.config import load_ensemble
+    from pipelines.ensemble.wav_stream import audio_writer
 
     start = time.perf_counter()
     rate = 44100
     if kind == "mix":
-        from pipelines.mix.mixdown import mixdown
+        from pipelines.ensemble.mixdown import mixdown
 
         sources = []
         rng = np.random.default_rng(0)
@@ -88,9 +88,9 @@ def _child(kind: str, seconds: float, folder: Path) -> dict:
         report = argparse.Namespace(seconds=output.audio.size / rate, loudness=float("nan"),
                                     peak_db=float("nan"))
     else:
+        from pipelines.ensemble.ensemble_output import write_ensemble
+        from pipelines.ensemble.spool import AudioSpool
         from pipelines.methods.render import render_score
-        from pipelines.mix.ensemble_output import write_ensemble
-        from pipelines.mix.spool import AudioSpool
 
         base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         spool = AudioSpool(folder, rate) if kind == "render" else None  # as arco render does

@@ -12,9 +12,9 @@ import scipy.signal
 import soundfile as sf
 
 import pipelines.cli.main as cli
-from pipelines.mix.config import load_ensemble
-from pipelines.mix.mixdown import mixdown
-from pipelines.mix.wav_stream import audio_writer
+from pipelines.ensemble.config import load_ensemble
+from pipelines.ensemble.mixdown import mixdown
+from pipelines.ensemble.wav_stream import audio_writer
 from pipelines.perform.timing import downbeats, player_deviation
 from synth.lufs import LoudnessMeter, integrated_loudness, k_weighting
 from synth.pan import Panner, pan_gains

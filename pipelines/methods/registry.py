@@ -205,8 +205,8 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
         Progress bars.
     engine : str
         Synthesis engine (:func:`synth.engines.engine_names`).
-    spool : pipelines.mix.spool.AudioSpool, optional
-        Keep each part's audio on disk as it is rendered (the built-in methods do it part
+    spool : pipelines.ensemble.spool.AudioSpool, optional
+        Keep each part's audio on disk as it is rendered (rules and feedback do it part
         by part; any other method's parts are spooled when it returns); the parts' and the
         mix's ``audio`` are then empty.
 

@@ -58,7 +58,7 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
         Record the engine's per-hop contact diagnostics of every part.
     progress : bool, optional
         Progress bars (None: when stderr is a terminal).
-    spool : pipelines.mix.spool.AudioSpool, optional
+    spool : pipelines.ensemble.spool.AudioSpool, optional
         Each part's audio to disk as it is rendered (its and the mix's ``audio`` empty).
 
     Returns

@@ -80,7 +80,7 @@ def player_warp(warp: Callable[[np.ndarray], np.ndarray], notes: pd.DataFrame,
     part_index : int
     seed : int
     sigma, limit : float, s, optional
-        Default: ``[timing]`` of ``pipelines/mix/ensemble.toml``.
+        Default: ``[timing]`` of ``pipelines/ensemble/ensemble.toml``.
 
     Examples
     --------
@@ -91,7 +91,7 @@ def player_warp(warp: Callable[[np.ndarray], np.ndarray], notes: pd.DataFrame,
     (2.0, True)
     """
     if sigma is None or limit is None:
-        from pipelines.mix.config import load_ensemble
+        from pipelines.ensemble.config import load_ensemble
 
         timing = load_ensemble()["timing"]
         sigma = timing["sigma"] if sigma is None else sigma

@@ -12,8 +12,8 @@ from pathlib import Path
 from data_schemas.errors import ParameterError
 from pipelines.cli.outputs import output_file
 from pipelines.cli.types import non_negative_int
+from pipelines.ensemble.options import add_ensemble_arguments, ensemble_settings
 from pipelines.methods.registry import METHODS, check_methods, get_method
-from pipelines.mix.options import add_ensemble_arguments, ensemble_settings
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
 
@@ -142,7 +142,7 @@ def _spool(args: argparse.Namespace):
     if not (args.all_parts and args.output):
         yield None
         return
-    from pipelines.mix.spool import AudioSpool
+    from pipelines.ensemble.spool import AudioSpool
 
     folder = Path(args.output).absolute().parent
     folder.mkdir(parents=True, exist_ok=True)
@@ -184,7 +184,7 @@ def _write(args: argparse.Namespace, output, variant: str, say) -> None:
 
 
 def _write_ensemble(args: argparse.Namespace, output, variant: str, say) -> None:
-    from pipelines.mix.ensemble_output import write_ensemble
+    from pipelines.ensemble.ensemble_output import write_ensemble
 
     room = args.ensemble["room"]
     report = write_ensemble(output, args.output, sample_rate=args.sample_rate,

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipelines.mix.wav_stream import audio_writer
+from pipelines.ensemble.wav_stream import audio_writer
 
 
 class AudioSpool:

@@ -1,6 +1,6 @@
 """The ensemble settings: seating (pans), room, master loudness and players' timing.
 
-Shipped defaults live in ``pipelines/mix/ensemble.toml``; a user's TOML is merged over them
+Shipped defaults live in ``pipelines/ensemble/ensemble.toml``; a user's TOML is merged over them
 key by key and every value is checked (:class:`~data_schemas.errors.ParameterError`
 naming the file and key).
 """
@@ -35,7 +35,7 @@ def load_ensemble(path: str | os.PathLike | None = None) -> dict[str, Any]:
     >>> cfg["seating"]["pans"][0], cfg["room"]["rt60"], cfg["master"]["loudness"]
     (-0.7, 1.8, -18.0)
     """
-    text = resources.files("pipelines").joinpath("mix/ensemble.toml").read_text("utf-8")
+    text = resources.files("pipelines").joinpath("ensemble/ensemble.toml").read_text("utf-8")
     config = tomllib.loads(text)
     if path is not None:
         path = Path(path)
@@ -46,7 +46,7 @@ def load_ensemble(path: str | os.PathLike | None = None) -> dict[str, Any]:
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise ParameterError(f"--mix-config {path}: not valid TOML ({exc})") from None
         _merge(config, user, str(path))
-    check_ensemble(config, source=str(path or "pipelines/mix/ensemble.toml"))
+    check_ensemble(config, source=str(path or "pipelines/ensemble/ensemble.toml"))
     return config
 
 

@@ -7,10 +7,10 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from pipelines.mix.config import part_pans
-from pipelines.mix.mixdown import MixReport, mixdown
-from pipelines.mix.spool import AudioSpool
-from pipelines.mix.wav_stream import audio_writer
+from pipelines.ensemble.config import part_pans
+from pipelines.ensemble.mixdown import MixReport, mixdown
+from pipelines.ensemble.spool import AudioSpool
+from pipelines.ensemble.wav_stream import audio_writer
 
 
 def stem_paths(output: str | os.PathLike, parts: list) -> list[Path]:

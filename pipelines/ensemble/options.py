@@ -1,7 +1,7 @@
 """``arco render --all-parts`` options for the ensemble: seating, room, master loudness.
 
 Imports nothing heavy (``arco --help`` stays fast); the mix runs in
-:func:`pipelines.mix.ensemble_output.write_ensemble`.
+:func:`pipelines.ensemble.ensemble_output.write_ensemble`.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ def add_ensemble_arguments(parser: argparse.ArgumentParser) -> None:
         "ensemble (--all-parts)",
         "the parts mixed in stereo as a quartet sits, in a synthesized room, the master "
         "normalised to a loudness; stems OUT-<index>-<instrument>.wav (panned, dry) beside "
-        "it; defaults in pipelines/mix/ensemble.toml")
+        "it; defaults in pipelines/ensemble/ensemble.toml")
     group.add_argument("--pan", metavar="P1,P2,...",
                        help="pan position of each part in score order, -1 left .. 1 right, "
                             "written --pan=-0.7,-0.25,0.25,0.7 (the default)")
@@ -43,7 +43,7 @@ def ensemble_settings(args: argparse.Namespace) -> dict[str, Any]:
     >>> cfg["seating"]["pans"], cfg["room"]["kind"], cfg["room"]["rt60"], cfg["master"]["loudness"]
     ([-1.0, 1.0], 'none', 1.8, -23.0)
     """
-    from pipelines.mix.config import check_ensemble, load_ensemble
+    from pipelines.ensemble.config import check_ensemble, load_ensemble
 
     config = load_ensemble(getattr(args, "mix_config", None))
     if getattr(args, "pan", None):

@@ -21,7 +21,7 @@ import numpy as np
 import soundfile as sf
 from tqdm import tqdm
 
-from pipelines.mix.wav_stream import audio_writer
+from pipelines.ensemble.wav_stream import audio_writer
 from synth.lufs import LoudnessMeter
 from synth.pan import Panner
 from synth.room import BlockConvolver, room_response
@@ -56,7 +56,7 @@ def mixdown(sources: list[str | os.PathLike], output: str | os.PathLike, *,
     pans : list of float
         Each part's position, -1 left .. +1 right.
     ensemble : dict
-        Settings (:func:`pipelines.mix.config.load_ensemble`): ``seating.max_itd``,
+        Settings (:func:`pipelines.ensemble.config.load_ensemble`): ``seating.max_itd``,
         ``room`` (``kind``, ``rt60`` s, ``wet``, ``seed``), ``master`` (``loudness`` LUFS,
         ``ceiling`` dBFS).
     stems : list of path-like, optional
@@ -70,7 +70,7 @@ def mixdown(sources: list[str | os.PathLike], output: str | os.PathLike, *,
     Examples
     --------
     >>> import scipy.io.wavfile
-    >>> from pipelines.mix.config import load_ensemble
+    >>> from pipelines.ensemble.config import load_ensemble
     >>> folder = Path(tempfile.mkdtemp())
     >>> t = np.arange(44100 * 2) / 44100
     >>> scipy.io.wavfile.write(folder / "a.wav", 44100, (0.1 * np.sin(2e3 * t)).astype("f4"))
