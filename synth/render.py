@@ -173,14 +173,18 @@ def check_audio(audio: np.ndarray, ceiling: float = AUDIO_CEILING, *,
     ...
     data_schemas.errors.ParameterError: the audio peaks at 20 x full scale ...
     """
-    bad = ~np.isfinite(audio)
-    if bad.any():
-        first = int(np.flatnonzero(bad)[0])
-        raise ParameterError(f"the audio is not finite from sample {first} "
-                             f"({first / sample_rate:.3f} s at {sample_rate} Hz)")
-    peak = float(np.max(np.abs(audio))) if audio.size else 0.0
+    step = 1 << 20  # a chunk at a time: no full-length temporaries
+    chunks = [audio[a:a + step] for a in range(0, audio.size, step)]
+    for k, chunk in enumerate(chunks):
+        bad = ~np.isfinite(chunk)
+        if bad.any():
+            first = k * step + int(np.flatnonzero(bad)[0])
+            raise ParameterError(f"the audio is not finite from sample {first} "
+                                 f"({first / sample_rate:.3f} s at {sample_rate} Hz)")
+    peak = max((float(np.max(np.abs(c))) for c in chunks), default=0.0)
     if peak > ceiling:
-        first = int(np.flatnonzero(np.abs(audio) > ceiling)[0])
+        first = next(k * step + int(np.flatnonzero(np.abs(c) > ceiling)[0])
+                     for k, c in enumerate(chunks) if np.max(np.abs(c)) > ceiling)
         raise ParameterError(f"the audio peaks at {peak:.3g} x full scale (ceiling "
                              f"{ceiling:g}) from sample {first}: check the actions' forces and "
                              "beta")

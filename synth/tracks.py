@@ -138,14 +138,14 @@ def play_actions(inst: Any, actions: pd.DataFrame, *, tail: float = DEFAULT_TAIL
     end = (float(actions["time"].max()) if len(actions) else 0.0) + tail
     n_total = int(np.ceil(end * inst.sample_rate / SUB_BLOCK)) * SUB_BLOCK
     hop = DIAGNOSTICS_HOP if diagnostics else None
-    audio, rows = [], []
+    audio, rows = np.zeros(n_total, np.float32), []  # filled in place: no second copy
     bar = tqdm(total=round(n_total / inst.sample_rate, 2), unit="s audio", disable=not progress)
     start = 0
     while start < n_total:
         n_out = min(CHUNK, n_total - start)
         block = inst._run(n_out, {s: tr.inputs(start, n_out, inst) for s, tr in tracks.items()},
                           hop=hop, track=diagnostics)
-        audio.append(block.audio)
+        audio[start:start + n_out] = block.audio
         if diagnostics:
             rows.extend(_diagnostic_rows(start / inst.sample_rate, inst.sample_rate,
                                          block.hop_diagnostics))
@@ -153,7 +153,7 @@ def play_actions(inst: Any, actions: pd.DataFrame, *, tail: float = DEFAULT_TAIL
         start += n_out
     bar.close()
     table = pd.DataFrame(rows, columns=CONTACT_DIAGNOSTICS.column_names) if diagnostics else None
-    return np.concatenate(audio) if audio else np.zeros(0, np.float32), table
+    return audio, table
 
 
 def _diagnostic_rows(start: float, sample_rate: int, per_hop: dict) -> list[tuple]:

@@ -20,7 +20,7 @@ from pipelines.methods.result import PartOutput
 def play_rules(notes: pd.DataFrame, parts: list[int], *, config: dict[str, Any],
                seed: int = 0, sample_rate: int = 44100, instrument: str | None = None,
                skill: int = 3, transpose_octaves: bool = False, diagnostics: bool = True,
-               progress: bool | None = False, engine: str = "modal",
+               progress: bool | None = False, engine: str = "modal", spool=None,
                **_: Any) -> list[PartOutput]:
     """``rules``: the performance rules plan every part, the engine plays it open loop."""
     from pipelines.methods.rules import render
@@ -36,6 +36,7 @@ def play_rules(notes: pd.DataFrame, parts: list[int], *, config: dict[str, Any],
             sample_rate=sample_rate, seed=seed, diagnostics=diagnostics,
             progress=bool(progress) and len(parts) == 1,
             max_duration=float("inf"))  # render_method bounded the notes already
+        y = y if spool is None else spool.put(p.part_index, y)
         out.append(PartOutput(p.part_index, p.part_name, p.instrument, y,
                               p.performance.actions, p.performance.events, diag,
                               notes[notes["part_index"] == p.part_index],
@@ -47,10 +48,11 @@ def play_feedback(notes: pd.DataFrame, parts: list[int], *, config: dict[str, An
                   models=None, seed: int = 0, sample_rate: int = 44100,
                   instrument: str | None = None, skill: int = 3,
                   transpose_octaves: bool = False, diagnostics: bool = True,
-                  engine: str = "modal", **_: Any) -> list[PartOutput]:
+                  engine: str = "modal", spool=None, **_: Any) -> list[PartOutput]:
     """``feedback``: the rules' bowing, the listening controller chooses the force."""
     from pipelines.methods.feedback import render_feedback
     from pipelines.perform.rules import fermata_warp
+    from pipelines.perform.timing import player_warp
 
     warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
     rng = np.random.default_rng(seed)
@@ -60,8 +62,10 @@ def play_feedback(notes: pd.DataFrame, parts: list[int], *, config: dict[str, An
         name = instrument or str(part["instrument"].iloc[0])
         y, actions, diag, perf = render_feedback(
             part, config, models_dir=models, instrument=name, skill=skill, seed=seed,
-            sample_rate=sample_rate, transpose_octaves=transpose_octaves, warp=warp,
+            sample_rate=sample_rate, transpose_octaves=transpose_octaves,
+            warp=player_warp(warp, notes, index, seed=seed) if len(parts) > 1 else warp,
             rng=rng, diagnostics=diagnostics, engine=engine)
+        y = y if spool is None else spool.put(index, y)
         out.append(PartOutput(index, str(part["part_name"].iloc[0]), name, y, actions,
                               perf.events, diag, part, perf.warnings))
     return out

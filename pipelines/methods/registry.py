@@ -173,7 +173,7 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
                   transpose_octaves: bool = False, diagnostics: bool = True,
                   progress: bool | None = False, engine: str = "modal",
                   max_duration: float | None = None,
-                  max_notes: int | None = None) -> MethodOutput:
+                  max_notes: int | None = None, spool=None) -> MethodOutput:
     """Render the chosen parts of one score with one method and mix them.
 
     Parameters
@@ -210,6 +210,10 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
         Longest performance allowed (default :data:`data_schemas.limits.LIMITS`).
     max_notes : int, optional
         Most notes allowed in the chosen parts (default as ``max_duration``).
+    spool : pipelines.ensemble.spool.AudioSpool, optional
+        Keep each part's audio on disk as it is rendered (rules and feedback do it part
+        by part; any other method's parts are spooled when it returns); the parts' and the
+        mix's ``audio`` are then empty.
 
     Returns
     -------
@@ -230,7 +234,10 @@ def render_method(method: str, notes: pd.DataFrame, parts: list[int], *, stem: s
         notes, parts, config=config, database=database, models=models, seed=seed,
         sample_rate=sample_rate, instrument=instrument, skill=skill,
         transpose_octaves=transpose_octaves, diagnostics=diagnostics, progress=progress,
-        engine=engine)
+        engine=engine, **({} if spool is None else {"spool": spool}))
+    for part in out if spool is not None else []:
+        if part.audio.size or part.part_index not in spool.paths:
+            part.audio = spool.put(part.part_index, part.audio)
     seconds = time.perf_counter() - start
     return MethodOutput(method, stem, mix([p.audio for p in out]), out, seconds)
 

@@ -24,7 +24,7 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
                  db=None, models: str | os.PathLike | None = None,
                  search_config: str | os.PathLike | None = None, diagnostics: bool = False,
                  progress: bool | None = False, max_duration: float | None = None,
-                 max_notes: int | None = None) -> MethodOutput:
+                 max_notes: int | None = None, spool=None) -> MethodOutput:
     """Play a score (or a notes table) with one method on one engine.
 
     Parameters
@@ -48,22 +48,21 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
         Performer skill 0 (worst) .. 3 (exact); fold notes out of range by octaves.
     config : path-like or dict, optional
         Rules settings: a TOML merged over the shipped ones, or a loaded configuration.
-    db, models : path-like, optional
-        Gesture database (``arco build-db``; or a ``SamplingDatabase``) and listening
-        models (``arco train``), for the methods that need them.
-    search_config : path-like, optional
-        Sample-search settings merged over the shipped ones (when ``db`` is a path).
+    db, models, search_config : path-like, optional
+        Gesture database (``arco build-db``; or a ``SamplingDatabase``), listening models
+        (``arco train``) and sample-search settings over the shipped ones (``db`` a path).
     diagnostics, progress : bool, optional
         Record the engine's per-hop contact diagnostics of every part; progress bars (None:
         when stderr is a terminal).
     max_duration, max_notes : float (s) and int, optional
         Longest performance and most notes allowed (default: ``data_schemas.limits``).
+    spool : pipelines.ensemble.spool.AudioSpool, optional
+        Each part's audio to disk as it is rendered (its and the mix's ``audio`` empty).
 
     Returns
     -------
     MethodOutput
-        ``audio`` (float32, mono, the parts mixed) and per part its actions, note events,
-        diagnostics and warnings (``parts``).
+        ``audio`` (float32, mono, the parts mixed); per part its actions, events, diagnostics.
 
     Examples
     --------
@@ -93,7 +92,7 @@ def render_score(score: str | os.PathLike | pd.DataFrame, *, method: str = "rule
                          instrument=instrument, skill=skill,
                          transpose_octaves=transpose_octaves, diagnostics=diagnostics,
                          progress=progress, engine=engine, max_duration=max_duration,
-                         max_notes=max_notes)
+                         max_notes=max_notes, spool=spool)
 
 
 def _select(score, parts, start: int | None, end: int | None, movement: int | None = None,

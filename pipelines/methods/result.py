@@ -106,12 +106,37 @@ def mix(signals: list[np.ndarray], peak: float = PEAK) -> np.ndarray:
     Returns
     -------
     np.ndarray [shape=(max n_i,)], float32
+        (A single float32 signal that needs no attenuation is returned as it is.)
+
+    Examples
+    --------
+    >>> y = mix([np.ones(3, np.float32), np.full(2, 0.5, np.float32)], peak=0.89)
+    >>> [round(float(v), 4) for v in y]   # 1.5, 1.5, 1 scaled to a peak of 0.89
+    [0.89, 0.89, 0.5933]
     """
     n = max((s.size for s in signals), default=0)
-    out = np.zeros(n, np.float64)
+    if len(signals) == 1 and signals[0].dtype == np.float32 and all(
+            np.isfinite(c).all() and np.abs(c).max(initial=0.0) <= peak
+            for c in (signals[0][a:b] for a, b in _chunks(n))):
+        return signals[0]  # one part that needs nothing: no copy of it
+    top = max((float(np.max(np.abs(_summed(signals, a, b)))) for a, b in _chunks(n)),
+              default=0.0)
+    out = np.empty(n, np.float32)
+    for a, b in _chunks(n):  # float64 sums a chunk at a time: memory of the result only
+        chunk = _summed(signals, a, b)
+        if top > peak:
+            chunk *= peak / top
+        out[a:b] = chunk
+    return out
+
+
+def _chunks(n: int, size: int = 1 << 20) -> list[tuple[int, int]]:
+    return [(a, min(a + size, n)) for a in range(0, n, size)]
+
+
+def _summed(signals: list[np.ndarray], a: int, b: int) -> np.ndarray:
+    out = np.zeros(b - a, np.float64)
     for s in signals:
-        out[: s.size] += np.nan_to_num(s.astype(np.float64))
-    top = float(np.max(np.abs(out))) if n else 0.0
-    if top > peak:
-        out *= peak / top
-    return out.astype(np.float32)
+        part = s[a:min(b, s.size)]
+        out[: part.size] += np.nan_to_num(part.astype(np.float64))
+    return out

@@ -11,6 +11,7 @@ import pandas as pd
 from data_schemas.errors import ParameterError
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.perform.rules import fermata_warp, perform_part
+from pipelines.perform.timing import player_warp
 
 
 def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
@@ -26,7 +27,9 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
     config : dict
         Rules configuration.
     parts : list of int
-        Part indices to render (each on its own instrument, then mixed).
+        Part indices to render (each on its own instrument, then mixed); with several,
+        each player deviates a little from the shared time map between bar lines
+        (:func:`pipelines.perform.timing.player_warp`).
     instrument : str, optional
         Override the instrument (only with one part).
     skill : int
@@ -62,7 +65,8 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
     for index in tqdm(parts, desc="render", unit="part", disable=not show):
         part = notes[notes["part_index"] == index]
         name = instrument or str(part["instrument"].iloc[0])
-        perf = perform_part(part, config, instrument=name, skill=skill, rng=rng, warp=warp,
+        timed = player_warp(warp, notes, index, seed=seed) if len(parts) > 1 else warp
+        perf = perform_part(part, config, instrument=name, skill=skill, rng=rng, warp=timed,
                             transpose_octaves=transpose_octaves)
         rendered = PartRender(index, str(part["part_name"].iloc[0]), name, perf)
         if synth is not None:

@@ -33,6 +33,7 @@ from gesture_db.groups import chain_positions
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.perform.events import Event, Performance
 from pipelines.perform.rules import fermata_warp
+from pipelines.perform.timing import player_warp
 from pipelines.score.select import choose_parts
 
 #: Effective string lengths of targets are violin-equivalent (the database holds violin takes).
@@ -342,7 +343,9 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
     result = RenderResult(None, sample_rate)
     for index in tqdm(parts, desc="sampling", unit="part", disable=not show):
         rendered = _sampled_part(notes[notes["part_index"] == index], index, database, config,
-                                 instrument=instrument, warp=warp, feedback=closed,
+                                 instrument=instrument, feedback=closed,
+                                 warp=player_warp(warp, notes, index, seed=seed)
+                                 if len(parts) > 1 else warp,
                                  transpose_octaves=transpose_octaves)
         if audio:
             _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,

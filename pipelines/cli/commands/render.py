@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 from data_schemas.errors import ParameterError
 from pipelines.cli.outputs import output_file, removed_on_failure
 from pipelines.cli.types import MOVEMENT_HELP, add_limit_options, non_negative_int, positive_int
+from pipelines.ensemble.options import add_ensemble_arguments, ensemble_settings
 from pipelines.methods.registry import METHODS, check_methods, get_method
 from synth.engines import DEFAULT_ENGINE, engine_names
 from synth.strings import INSTRUMENT_NAMES
@@ -71,6 +74,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     out.add_argument("--sample-rate", type=int, default=44100, choices=(44100, 48000),
                      help="audio sample rate in Hz")
     out.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    add_ensemble_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -104,6 +108,12 @@ def _check(args: argparse.Namespace, method: str) -> None:
         if value and Path(value).suffix.lower() not in (".parquet", ".pq", ".csv"):
             raise ParameterError(f"--{option} {value}: use a .parquet (or .csv) file")
     check_methods([method], db=args.db, models=args.models, option="--method")
+    mixing = [o for o in ("pan", "room", "rt60", "loudness", "mix_config")
+              if getattr(args, o, None) is not None]
+    if mixing and not args.all_parts:
+        raise ParameterError(f"--{mixing[0].replace('_', '-')} applies to the ensemble mix "
+                             "(add --all-parts)")
+    args.ensemble = ensemble_settings(args) if args.all_parts else None
 
 
 def engine_choice(args: argparse.Namespace):
@@ -124,6 +134,11 @@ def run(args: argparse.Namespace) -> int:
     method = choose_method(args)
     _check(args, method)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
+    with _spool(args) as spool:
+        return _play(args, method, say, render_score, spool)
+
+
+def _play(args: argparse.Namespace, method: str, say, render_score, spool) -> int:
     output = render_score(args.score, method=method, engine=engine_choice(args),
                           parts="all" if args.all_parts else args.part,
                           start_measure=args.start_measure, end_measure=args.end_measure,
@@ -131,15 +146,30 @@ def run(args: argparse.Namespace) -> int:
                           instrument=args.instrument, skill=args.skill,
                           transpose_octaves=args.transpose_octaves, config=args.config,
                           db=args.db, models=args.models, diagnostics=bool(args.diagnostics),
-                          progress=False if args.quiet else None,
+                          progress=False if args.quiet else None, spool=spool,
                           max_duration=args.max_duration, max_notes=args.max_notes)
     for part in output.parts:
         for warning in part.warnings:
             say(f"arco render: warning: {warning}")
+    args.spool = spool
     targets = [getattr(args, o) for o in ("output", "actions", "diagnostics", "plot")]
     with removed_on_failure(*{Path(t).parent for t in targets if t}, recursive=False):
         _write(args, output, method, say)  # all of the outputs or none of them
     return 0
+
+
+@contextlib.contextmanager
+def _spool(args: argparse.Namespace):
+    """With --all-parts -o: a temporary folder beside the output holding each part's audio."""
+    if not (args.all_parts and args.output):
+        yield None
+        return
+    from pipelines.ensemble.spool import AudioSpool
+
+    folder = Path(args.output).absolute().parent
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=folder, prefix=".parts-") as tmp:
+        yield AudioSpool(tmp, args.sample_rate)
 
 
 def _write(args: argparse.Namespace, output, variant: str, say) -> None:
@@ -150,7 +180,9 @@ def _write(args: argparse.Namespace, output, variant: str, say) -> None:
     from pipelines.audio_io import write_audio
     from pipelines.reports.plots import plot_bowing
 
-    if args.output:
+    if args.output and args.all_parts:
+        _write_ensemble(args, output, variant, say)
+    elif args.output:
         path = write_audio(args.output, output.audio, args.sample_rate)
         say(f"wrote {path} ({output.audio.size / args.sample_rate:.1f} s, "
             f"{len(output.parts)} part(s), {variant})")
@@ -171,3 +203,18 @@ def _write(args: argparse.Namespace, output, variant: str, say) -> None:
                     title=f"{Path(args.score).name}: {first.part_name} ({first.instrument}), "
                           f"{variant}, skill {args.skill}", string_names=names)
         say(f"wrote {args.plot}")
+
+
+def _write_ensemble(args: argparse.Namespace, output, variant: str, say) -> None:
+    from pipelines.ensemble.ensemble_output import write_ensemble
+
+    room = args.ensemble["room"]
+    report = write_ensemble(output, args.output, sample_rate=args.sample_rate,
+                            ensemble=args.ensemble, spool=args.spool,
+                            progress=not args.quiet and sys.stderr.isatty())
+    where = "dry" if room["kind"] == "none" else f"hall, RT60 {room['rt60']:g} s"
+    say(f"wrote {args.output} (stereo, {report.seconds:.1f} s, {len(output.parts)} parts, "
+        f"{variant}, {where}; {report.loudness:.1f} LUFS, peak {report.peak_db:.1f} dBFS"
+        + (", limited by the peak ceiling" if report.limited else "") + ")")
+    for stem in report.stems:
+        say(f"wrote {stem} (stem: panned stereo, dry, at the master's gain)")

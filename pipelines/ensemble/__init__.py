@@ -1,0 +1,1 @@
+"""The ensemble: seating, room, master loudness and players' timing, streamed to disk."""
