@@ -166,7 +166,9 @@ def evaluate(audio: np.ndarray, actions: pd.DataFrame | None = None, *,
                        if sample_rate in (44100, 48000) else 0.02,
                        [s.reference_force for s in consts.strings],
                        _lanes(score, config), margin)
-    results = [_note_figures(span, context) for span in spans]
+    context.spans = spans if actions is None else None
+    results = [_note_figures(span, context, spans[i - 1] if i else None)
+               for i, span in enumerate(spans)]
     return {"measured_from": "instrument diagnostics" if slips else "audio-only estimates",
             "piece": piece_figures(results), "notes": results}
 
@@ -179,6 +181,7 @@ class _Context:
         self.audio, self.pre, self.sample_rate = audio, pre, sample_rate
         self.actions, self.slips, self.per_hop, self.ref = actions, slips, per_hop, ref
         self.string_refs, self.lanes, self.margin = string_refs, lanes, margin
+        self.spans: list[NoteSpan] | None = None  # timed notes (chords among them)
 
 
 def _lanes(score, config):
@@ -226,16 +229,19 @@ def _bowing(span: NoteSpan, t: np.ndarray, actions: pd.DataFrame | None):
     return tuple(np.interp(t, a["time"], a[c]) for c in ("bow_velocity", "bow_force", "beta"))
 
 
-def _note_figures(span: NoteSpan, ctx: _Context) -> dict[str, Any]:
+def _note_figures(span: NoteSpan, ctx: _Context, previous: NoteSpan | None) -> dict[str, Any]:
     sr = ctx.sample_rate
     hops = nm.note_hops(span, sr)
-    sustained = nm.sustained_hops(span, hops, sr, ctx.actions, ctx.margin)
+    sustained = nm.sustained_hops(span, hops, sr, ctx.actions, ctx.margin, ctx.spans)
+    start = span.t0
     if ctx.slips is not None:
         helm, attack = nm.from_slips(span, ctx.slips.onsets.get(span.string, np.zeros(0)),
                                      hops, sr)
     else:
-        helm, attack, _ = nm.from_waveform(span, ctx.pre, hops, sr)
-    blocked = nm.attack_blocked(span, ctx.actions)
+        if ctx.margin > 0:
+            start = nm.audio_onset(span, previous, ctx.pre, sr, ctx.margin)
+        helm, attack, _ = nm.from_waveform(span, ctx.pre, hops, sr, start)
+    blocked = nm.attack_blocked(span, ctx.actions, ctx.spans)
     stats = _teacher_stats(span, hops, ctx)
     t = (hops + 0.5) * HOP / sr
     bowing = _bowing(span, t, ctx.actions)
@@ -260,7 +266,7 @@ def _note_figures(span: NoteSpan, ctx: _Context) -> dict[str, Any]:
                          for st in stats], bool)
     return {
         "string": span.string, "semitones": span.semitones,
-        "start": float(span.t0), "end": float(span.t1),
+        "start": float(span.t0), "end": float(span.t1), "attack_from": float(start),
         "reached_helmholtz": bool(np.isfinite(attack)),
         "attack_ms": float("nan") if blocked else float(attack * 1000.0),
         "double_stop_attack": blocked,

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from pipelines.listening import regularity
-from pipelines.listening.spans import NoteSpan, bowed_elsewhere
+from pipelines.listening.spans import RING, NoteSpan, bowed_elsewhere
 from synth.listening.features import HOP
 
 #: Hops starting less than this after a note's start are the attack's, not sustained, s.
@@ -62,18 +62,20 @@ def note_hops(span: NoteSpan, sample_rate: int) -> np.ndarray:
 
 
 def sustained_hops(span: NoteSpan, hops: np.ndarray, sample_rate: int,
-                   actions: pd.DataFrame | None, margin: float = 0.0) -> np.ndarray:
+                   actions: pd.DataFrame | None, margin: float = 0.0,
+                   spans: list[NoteSpan] | None = None) -> np.ndarray:
     """Which of the note's hops are sustained (judged for the Helmholtz share).
 
     A hop is sustained when it starts :data:`SETTLE` (+ ``margin``) after the note's start,
-    ends :data:`RELEASE` (+ ``margin``) before its end, no other string is bowed at its
-    centre, and (with actions) the bow moves at :data:`SUSTAIN_SPEED` of the note's top
-    speed or more.
+    ends :data:`RELEASE` (+ ``margin``) before its end, no other note sounds at its centre
+    (:func:`~pipelines.listening.spans.bowed_elsewhere`; a recorded note also for
+    :data:`~pipelines.listening.spans.RING` after its end), and (with actions) the bow moves
+    at :data:`SUSTAIN_SPEED` of the note's top speed or more.
     """
     a = hops * HOP / sample_rate
     b = a + HOP / sample_rate
     ok = (a >= span.t0 + SETTLE + margin) & (b <= span.t1 - RELEASE - margin)
-    ok &= ~bowed_elsewhere(actions, span.string, 0.5 * (a + b))
+    ok &= ~bowed_elsewhere(actions, span, 0.5 * (a + b), spans, RING)
     if actions is not None and span.string >= 0 and ok.any():
         rows = actions[(actions["string"] == span.string) & ~actions["pluck"]]
         rows = rows.sort_values("time", kind="stable")
@@ -84,10 +86,11 @@ def sustained_hops(span: NoteSpan, hops: np.ndarray, sample_rate: int,
     return ok
 
 
-def attack_blocked(span: NoteSpan, actions: pd.DataFrame | None) -> bool:
-    """Whether another string is bowed during the note's first :data:`ATTACK_WINDOW`."""
+def attack_blocked(span: NoteSpan, actions: pd.DataFrame | None,
+                   spans: list[NoteSpan] | None = None) -> bool:
+    """Whether another note sounds during the note's first :data:`ATTACK_WINDOW`."""
     t = np.linspace(span.t0, min(span.t1, span.t0 + ATTACK_WINDOW), 21)[1:]
-    return bool(bowed_elsewhere(actions, span.string, t).any())
+    return bool(bowed_elsewhere(actions, span, t, spans).any())
 
 
 def from_slips(span: NoteSpan, onsets: np.ndarray, hops: np.ndarray,
@@ -111,14 +114,41 @@ def emphasised(audio: np.ndarray) -> np.ndarray:
     return np.diff(x, prepend=x[:1]) if x.size else x
 
 
-def from_waveform(span: NoteSpan, pre: np.ndarray, hops: np.ndarray,
-                  sample_rate: int) -> tuple[np.ndarray, float, np.ndarray]:
+def audio_onset(span: NoteSpan, previous: NoteSpan | None, pre: np.ndarray,
+                sample_rate: int, margin: float) -> float:
+    """A coarse note start (+-``margin`` s) refined from the audio, s.
+
+    After a note that lasts to within ``margin`` of this one: the first sample of the
+    window ``t0 +- margin`` where the earlier note's waveform stops repeating at its period
+    (its period correlation falls below :data:`~pipelines.listening.regularity.CORRELATION`;
+    the window's end when it never does). After a rest: the window's first sample where the
+    emphasised audio's 5 ms RMS reaches a tenth of its maximum in the window.
+    """
+    lo = max(int(round((span.t0 - margin) * sample_rate)), 0)
+    hi = max(int(round((span.t0 + margin) * sample_rate)), lo + 1)
+    if previous is not None and previous.t1 > span.t0 - margin:
+        p = sample_rate / float(previous.f0_at(span.t0))
+        corr = regularity.period_correlation(pre[lo:hi + int(np.ceil(3 * p))], p)[:hi - lo]
+        below = np.flatnonzero(corr < regularity.CORRELATION)
+        return (lo + (int(below[0]) if below.size else hi - lo)) / sample_rate
+    w = max(int(0.005 * sample_rate), 1)
+    x = pre[lo:hi + w] ** 2
+    rms = np.sqrt(np.convolve(x, np.ones(w) / w, "valid"))[:hi - lo]
+    if not rms.size or rms.max() <= 0:
+        return span.t0
+    return (lo + int(np.argmax(rms >= 0.1 * rms.max()))) / sample_rate
+
+
+def from_waveform(span: NoteSpan, pre: np.ndarray, hops: np.ndarray, sample_rate: int,
+                  start: float | None = None) -> tuple[np.ndarray, float, np.ndarray]:
     """Helmholtz flag per hop, attack time (s) and median period correlation per hop.
 
-    ``pre`` is :func:`emphasised` audio of the whole performance.
+    ``pre`` is :func:`emphasised` audio of the whole performance; the attack is timed from
+    ``start`` (default: the note's start).
     """
     period = sample_rate / float(span.f0_at(span.t0 + SETTLE))
-    i0 = int(round(span.t0 * sample_rate))
+    start = span.t0 if start is None else start
+    i0 = int(round(start * sample_rate))
     i1 = int(round(span.t1 * sample_rate))
     corr = regularity.period_correlation(pre[i0:i1 + int(np.ceil(3 * period))],
                                          period)[:max(i1 - i0, 0)]

@@ -20,6 +20,9 @@ from synth.listening.features import HOP
 STEP = 0.25
 #: Shortest note found in an actions table, s.
 SHORTEST = 0.03
+#: A recorded note rings on this long after its aligned end (its string, the room): the
+#: sustained hops of a recording keep this far from other notes, s.
+RING = 0.1
 
 
 @dataclass(frozen=True)
@@ -127,15 +130,28 @@ def spans_from_times(table: pd.DataFrame, tuning_a4: float = 440.0) -> list[Note
     return sorted(out, key=lambda n: n.t0)
 
 
-def bowed_elsewhere(actions: pd.DataFrame | None, string: int, t: np.ndarray) -> np.ndarray:
-    """Whether another string than ``string`` is bowed at times ``t`` (a double stop).
+def bowed_elsewhere(actions: pd.DataFrame | None, span: NoteSpan, t: np.ndarray,
+                    spans: list[NoteSpan] | None = None, ring: float = 0.0) -> np.ndarray:
+    """Whether another note sounds with ``span`` at times ``t`` (a double stop or chord).
 
-    False everywhere without actions (an aligned recording: one note at a time).
+    With actions: another string is bowed. Without (an aligned recording): another of
+    ``spans`` lasts over the time, or ended less than ``ring`` (s) before it.
+
+    Examples
+    --------
+    >>> t = pd.DataFrame({"start_s": [0.0, 0.5], "end_s": [1.0, 1.5], "midi_pitch": [60, 64]})
+    >>> notes = spans_from_times(t)
+    >>> bowed_elsewhere(None, notes[0], np.array([0.2, 0.7]), notes)
+    array([False,  True])
     """
     t = np.asarray(t, np.float64)
     out = np.zeros(t.shape, bool)
     if actions is None:
+        for other in spans or []:
+            if other is not span and other.t0 < span.t1 and other.t1 + ring > span.t0:
+                out |= (t > other.t0) & (t < other.t1 + ring)
         return out
+    string = span.string
     for _, a in actions[~actions["pluck"] & (actions["string"] != string)].groupby("string"):
         a = a.sort_values("time", kind="stable")
         time = a["time"].to_numpy(np.float64)
