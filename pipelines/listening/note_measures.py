@@ -139,23 +139,6 @@ def audio_onset(span: NoteSpan, previous: NoteSpan | None, pre: np.ndarray,
     return (lo + int(np.argmax(rms >= 0.1 * rms.max()))) / sample_rate
 
 
-#: A period counts as regular only this loud (energy relative to the note's 90th percentile
-#: period energy; -20 dB): a bow starting from silence first moves the string gently, and
-#: that quiet, nearly free vibration repeats well before the slips settle.
-LOUD = 0.01
-
-
-def _loud(x: np.ndarray, width: int) -> np.ndarray:
-    """1 where the ``width``-sample window from each sample holds :data:`LOUD` energy."""
-    out = np.zeros(x.size)
-    if x.size < width or width < 1:
-        return out
-    e = np.concatenate([[0.0], np.cumsum(x * x)])
-    energy = e[width:] - e[:-width]
-    out[:energy.size] = energy >= LOUD * np.percentile(energy, 90)
-    return out
-
-
 def from_waveform(span: NoteSpan, pre: np.ndarray, hops: np.ndarray, sample_rate: int,
                   start: float | None = None) -> tuple[np.ndarray, float, np.ndarray]:
     """Helmholtz flag per hop, attack time (s) and median period correlation per hop.
@@ -169,7 +152,6 @@ def from_waveform(span: NoteSpan, pre: np.ndarray, hops: np.ndarray, sample_rate
     i1 = int(round(span.t1 * sample_rate))
     corr = regularity.period_correlation(pre[i0:i1 + int(np.ceil(3 * period))],
                                          period)[:max(i1 - i0, 0)]
-    corr = corr * _loud(pre[i0:i1], int(round(period)))
     med = np.zeros(hops.size)
     for j, k in enumerate(hops):
         seg = corr[max(k * HOP - i0, 0):max((k + 1) * HOP - i0, 0)]
