@@ -30,6 +30,10 @@ CONTACT_DIAGNOSTICS = TableSpec(
         Column("sounding_period", pa.float64(), "s",
                "Median interval between slip onsets (earlier hops' last onset included); "
                "null when unknown.", nullable=True, minimum=0.0),
+        Column("onset_times", pa.list_(pa.float64()), "s",
+               "The slip record: time of each slip onset counted in slip_onsets, from the "
+               "performance's start, at the instrument's internal sample resolution; null "
+               "in tables written before it was recorded.", nullable=True, required=False),
     ),
     checks=(non_decreasing("time"),),
 )

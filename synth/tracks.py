@@ -162,6 +162,7 @@ def _diagnostic_rows(start: float, sample_rate: int, per_hop: dict) -> list[tupl
         for k, d in enumerate(hops):
             period = d.sounding_period if np.isfinite(d.sounding_period) else None
             rows.append((start + k * DIAGNOSTICS_HOP / sample_rate, s, d.slip_onsets,
-                         d.slipping_share, d.contact_share, d.mean_slip_speed, period))
+                         d.slipping_share, d.contact_share, d.mean_slip_speed, period,
+                         d.onset_times.tolist()))
     rows.sort(key=lambda r: (r[0], r[1]))
     return rows

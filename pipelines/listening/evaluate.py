@@ -1,10 +1,20 @@
 """The yardstick: per-note and per-piece figures of a rendered (or recorded) performance.
 
-Notes are found in the actions table (a bowed run of one string between bow changes, lifts
-or finger changes). Each hop of a note is judged by the automatic teacher: from the
-instrument's contact diagnostics when the render recorded them, else from audio-only
-estimates (periodicity at the expected period instead of slip onsets), so real recordings
-can be evaluated too. The output says which was used (``measured_from``).
+Notes come from the actions table (a bowed run of one string between bow changes, lifts or
+finger changes) or, for a recording, from performed note times (an alignment). Each note's
+hops are judged two ways, on the same sustained hops
+(:func:`pipelines.listening.note_measures.sustained_hops`):
+
+- from the instrument's slip record when the render recorded its contact diagnostics
+  (``measured_from: "instrument diagnostics"``): a hop is in Helmholtz motion when every
+  slip interval over it is one regular period, and the attack lasts until the first of five
+  consecutive regular periods, at the slip onsets' resolution;
+- from the audio alone (``"audio-only estimates"``, for recordings): a hop is in Helmholtz
+  motion when the waveform repeats period after period (period correlation of
+  :mod:`pipelines.listening.regularity`), and the attack lasts until five consecutive
+  periods repeat, at sample resolution.
+
+The teacher's five classes, the pitch and the level come from the audio for both.
 """
 
 from __future__ import annotations
@@ -15,6 +25,8 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.errors import ParameterError
+from pipelines.listening import note_measures as nm
+from pipelines.listening.spans import NoteSpan, find_notes, spans_from_actions, spans_from_times
 from synth.listening.features import HOP
 from synth.listening.teacher import (
     RegimeStatistics,
@@ -26,60 +38,9 @@ from synth.listening.teacher import (
 from synth.render import check_audio
 
 MF_RATIO = 0.33 / 0.10  # velocity / beta of the mezzo-forte lane
-SETTLE = 0.05  # s after a note's start before hops count as sustained
-SUSTAIN_SPEED = 0.9  # share of the note's top speed for a sustained hop
-STABLE_HOPS = 3  # consecutive Helmholtz hops that end an attack
-#: A finger move (semitones) from one row to the next that starts a new note; a vibrato
-#: moves the finger by a few cents a row (15 cents at 7 Hz: under 4 cents per 5 ms row).
-STEP = 0.25
-
-
-def find_notes(actions: pd.DataFrame, *, sample_rate: int = 44100) -> pd.DataFrame:
-    """Bowed notes of an actions table.
-
-    A note ends at a bow change, a lift, or a finger step of more than :data:`STEP`
-    semitones between rows (a vibrato's gradual finger motion does not end it).
-
-    Returns
-    -------
-    pandas.DataFrame
-        ``string``, ``semitones`` (at the note's first row), ``t0``, ``t1`` (s),
-        ``first_hop``, ``last_hop`` (exclusive).
-    """
-    rows = []
-    for s, a in actions[~actions["pluck"]].groupby("string", sort=True):
-        a = a.sort_values("time", kind="stable")
-        t = a["time"].to_numpy()
-        v = a["bow_velocity"].to_numpy()
-        f = a["bow_force"].to_numpy()
-        semis = np.round(-12.0 * np.log2(1.0 - a["finger_ratio"].to_numpy(np.float64)), 2)
-        on = (f > 0) & (v != 0)
-        start = None
-        for i in range(t.size + 1):
-            boundary = i == t.size or not on[i] or (
-                start is not None and (np.sign(v[i]) != np.sign(v[start])
-                                       or abs(semis[i] - semis[i - 1]) > STEP))
-            if boundary and start is not None:
-                end = t[min(i, t.size - 1)]
-                if end - t[start] >= 0.03:
-                    rows.append((int(s), float(semis[start]), float(t[start]), float(end)))
-                start = None
-            if i < t.size and on[i] and start is None:
-                start = i
-    notes = pd.DataFrame(rows, columns=["string", "semitones", "t0", "t1"])
-    notes = notes.sort_values("t0", kind="stable").reset_index(drop=True)
-    notes["first_hop"] = (notes["t0"] * sample_rate // HOP).astype(int)
-    notes["last_hop"] = np.ceil(notes["t1"] * sample_rate / HOP).astype(int)
-    return notes
-
-
-def _per_hop(column: np.ndarray, times: np.ndarray, n: int, sample_rate: int,
-             fill: float) -> np.ndarray:
-    out = np.full(n, fill, np.float64)
-    k = np.rint(times * sample_rate / HOP).astype(int)
-    ok = (k >= 0) & (k < n)
-    out[k[ok]] = column[ok]
-    return out
+#: Notes at performed times from an alignment are coarse (about +-40 ms): their sustained
+#: hops keep this much further from the note's ends, s.
+ALIGNMENT_MARGIN = 0.04
 
 
 #: Audio whose peak is below this (full scale = 1) is silent: nothing to evaluate.
@@ -108,32 +69,74 @@ def check_playable(audio: np.ndarray, sample_rate: int) -> None:
         raise ParameterError(f"the audio is silent (peak {peak:.3g} of full scale)")
 
 
-def evaluate(audio: np.ndarray, actions: pd.DataFrame, *, sample_rate: int = 44100,
-             diagnostics: pd.DataFrame | None = None, instrument: str = "violin",
-             score: pd.DataFrame | None = None,
-             config: dict[str, Any] | None = None) -> dict[str, Any]:
+#: Audio may run this much past the last note's end (a render's ring-out, a recording's
+#: applause) before it is taken for another piece's, s.
+LENGTH_SLACK = 5.0
+#: ... and end at most this much before it, s.
+SHORT_SLACK = 0.1
+
+
+def check_length(audio_seconds: float, spans: list[NoteSpan], what: str = "the notes") -> None:
+    """Refuse audio much shorter or longer than the notes it should play.
+
+    Examples
+    --------
+    >>> from pipelines.listening.spans import spans_from_times
+    >>> notes = spans_from_times(pd.DataFrame({"start_s": [0.0], "end_s": [2.0],
+    ...                                        "midi_pitch": [69]}))
+    >>> check_length(3.0, notes)
+    >>> check_length(1.0, notes)
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: the audio lasts 1 s but the notes end at 2 s
+    """
+    if not spans:
+        raise ParameterError(f"{what} hold no bowed note to evaluate")
+    end = max(n.t1 for n in spans)
+    if audio_seconds < end - SHORT_SLACK or audio_seconds > end + LENGTH_SLACK:
+        raise ParameterError(f"the audio lasts {audio_seconds:.3g} s but {what} end at "
+                             f"{end:.3g} s")
+
+
+def evaluate(audio: np.ndarray, actions: pd.DataFrame | None = None, *,
+             sample_rate: int = 44100, diagnostics: pd.DataFrame | None = None,
+             instrument: str = "violin", score: pd.DataFrame | None = None,
+             config: dict[str, Any] | None = None,
+             timed_notes: pd.DataFrame | None = None) -> dict[str, Any]:
     """Evaluate a performance.
 
     Parameters
     ----------
     audio : np.ndarray [shape=(n,)]
         Mono audio.
-    actions : pandas.DataFrame
-        The actions table that was played.
+    actions : pandas.DataFrame, optional
+        The actions table that was played (else ``timed_notes``).
     sample_rate : int, Hz
     diagnostics : pandas.DataFrame, optional
-        Contact diagnostics recorded by the render (else audio-only estimates).
+        Contact diagnostics recorded by the render, with the slip record (else audio-only
+        estimates).
     instrument : str
     score : pandas.DataFrame, optional
         Notes table of the score: each found note takes the dynamic of the score note with
         the nearest onset, and its level target from the dynamic's bow lane.
     config : dict, optional
         Rules configuration (bow lanes) for ``score``.
+    timed_notes : pandas.DataFrame, optional
+        Notes at performed times (``start_s, end_s, midi_pitch``, as
+        :func:`pipelines.reports.recordings.read_aligned_notes` reads an alignment), for a
+        recording without actions; their sustained hops keep :data:`ALIGNMENT_MARGIN`
+        further from the notes' ends.
 
     Returns
     -------
     dict
         ``{"measured_from": ..., "piece": {...}, "notes": [...]}`` (see the module doc).
+
+    Raises
+    ------
+    ParameterError
+        Unplayable audio, neither actions nor timed notes, or audio whose length does not
+        fit the notes (:func:`check_length`).
     """
     from synth.listening.clips import reference_rms
     from synth.strings import load_instrument
@@ -143,101 +146,146 @@ def evaluate(audio: np.ndarray, actions: pd.DataFrame, *, sample_rate: int = 441
     if audio.ndim != 1:
         raise ParameterError(f"audio must be mono, got shape {audio.shape}")
     check_playable(audio, sample_rate)
+    if actions is not None:
+        spans = spans_from_actions(actions, [s.nominal_frequency(consts.tuning_a4)
+                                             for s in consts.strings])
+        margin = 0.0
+    elif timed_notes is not None:
+        spans, margin = spans_from_times(timed_notes, consts.tuning_a4), ALIGNMENT_MARGIN
+    else:
+        raise ParameterError("evaluate needs the actions or the notes' performed times")
+    check_length(audio.size / sample_rate, spans,
+                 "the actions" if actions is not None else "the notes")
     n_hops = int(np.ceil(audio.size / HOP))
     audio = np.concatenate([audio, np.zeros(n_hops * HOP + 4 * HOP - audio.size)])
-    notes = find_notes(actions, sample_rate=sample_rate)
-    ref = reference_rms(instrument, sample_rate) if sample_rate in (44100, 48000) else 0.02
-    t_hop = (np.arange(n_hops) + 1) * HOP / sample_rate
-    source = "instrument diagnostics" if diagnostics is not None and len(diagnostics) \
-        else "audio-only estimates"
-    lanes = None
-    if score is not None:
-        from pipelines.perform.config import dynamic_table, load_config
-
-        cfg = config or load_config()
-        lanes = (score["onset"].to_numpy(np.float64), score["dynamic"].to_numpy(np.float64),
-                 lambda lvl: dynamic_table(cfg, "velocity", lvl) / dynamic_table(cfg, "beta",
-                                                                                    lvl))
-    stats_by_string: dict[int, list[RegimeStatistics]] = {}
-    for s in notes["string"].unique():
-        s = int(s)
-        open_f0 = consts.strings[s].nominal_frequency(consts.tuning_a4)
-        a = actions[(actions["string"] == s) & ~actions["pluck"]].sort_values("time")
-        ratio = 1.0 - np.interp(t_hop, a["time"], a["finger_ratio"].astype(np.float64))
-        f0 = open_f0 / np.maximum(ratio, 0.2)
-        if source == "instrument diagnostics":
-            d = diagnostics[diagnostics["string"] == s]
-            times = d["time"].to_numpy(np.float64)
-            onsets = _per_hop(d["slip_onsets"].to_numpy(np.float64), times, n_hops,
-                              sample_rate, 0.0)
-            period = _per_hop(pd.to_numeric(d["sounding_period"]).to_numpy(np.float64), times,
-                              n_hops, sample_rate, np.nan)
-            stats_by_string[s] = hop_statistics(onsets, period, audio, f0=f0,
-                                                sample_rate=sample_rate, reference_rms=ref)
-        else:
-            stats_by_string[s] = audio_statistics(audio, f0=f0, sample_rate=sample_rate,
-                                                  reference_rms=ref)
-    results = []
-    for note in notes.itertuples(index=False):
-        results.append(_note_figures(note, stats_by_string[int(note.string)], actions,
-                                     consts.strings[int(note.string)].reference_force,
-                                     sample_rate, lanes))
-    return {"measured_from": source, "piece": piece_figures(results), "notes": results}
+    slips = nm.SlipRecord.from_diagnostics(diagnostics) \
+        if diagnostics is not None and len(diagnostics) else None
+    context = _Context(audio, nm.emphasised(audio), sample_rate, actions, slips,
+                       _per_hop_slips(diagnostics, n_hops, sample_rate) if slips else {},
+                       reference_rms(instrument, sample_rate)
+                       if sample_rate in (44100, 48000) else 0.02,
+                       [s.reference_force for s in consts.strings],
+                       _lanes(score, config), margin)
+    context.spans = spans if actions is None else None
+    results = [_note_figures(span, context, spans[i - 1] if i else None)
+               for i, span in enumerate(spans)]
+    return {"measured_from": "instrument diagnostics" if slips else "audio-only estimates",
+            "piece": piece_figures(results), "notes": results}
 
 
-def _helmholtz(st: RegimeStatistics) -> bool:
-    spp_ok = not np.isfinite(st.slips_per_period) or abs(st.slips_per_period - 1.0) <= 0.1
-    return st.helmholtz_share >= 0.9 and spp_ok and st.acf_t0 >= 0.8
+class _Context:
+    """What every note's figures read (one performance)."""
+
+    def __init__(self, audio, pre, sample_rate, actions, slips, per_hop, ref, string_refs,
+                 lanes, margin):
+        self.audio, self.pre, self.sample_rate = audio, pre, sample_rate
+        self.actions, self.slips, self.per_hop, self.ref = actions, slips, per_hop, ref
+        self.string_refs, self.lanes, self.margin = string_refs, lanes, margin
+        self.spans: list[NoteSpan] | None = None  # timed notes (chords among them)
 
 
-def _note_figures(note, stats: list[RegimeStatistics], actions: pd.DataFrame,
-                  string_ref: float, sample_rate: int, lanes) -> dict[str, Any]:
-    a = actions[(actions["string"] == note.string) & (actions["time"] >= note.t0)
-                & (actions["time"] <= note.t1)]
-    hops = np.arange(note.first_hop, min(note.last_hop, len(stats)))
-    t = (hops + 1) * HOP / sample_rate
-    v = np.abs(np.interp(t, a["time"], a["bow_velocity"]))
-    force = np.interp(t, a["time"], a["bow_force"])
-    beta = np.interp(t, a["time"], a["beta"])
-    top = float(v.max()) if v.size else 0.0
-    sustained = (v >= SUSTAIN_SPEED * top) & (t >= note.t0 + SETTLE) if top > 0 else v > 0
-    classes = np.array([judge(stats[k], force_ratio=force[i] / reference_force(
-        string_ref, max(v[i], 1e-3), beta[i])) for i, k in enumerate(hops)], np.int64)
-    helm = np.array([_helmholtz(stats[k]) for k in hops], bool)
-    sounding = np.array([(stats[k].slips_per_period > 0) if np.isfinite(
-        stats[k].slips_per_period) else stats[k].level_db > -50.0 for k in hops], bool)
-    attack = float("nan")
-    if sounding.any():
-        first = int(np.argmax(sounding))
-        run = np.convolve(helm.astype(int), np.ones(STABLE_HOPS, int), "valid")
-        stable = np.flatnonzero(run[first:] == STABLE_HOPS)
-        if stable.size:
-            attack = float(stable[0] * HOP / sample_rate * 1000.0)
-    cents = np.array([stats[k].pitch_error_cents for k in hops])[sustained]
-    level = np.array([stats[k].level_db for k in hops])[sustained]
-    lane_ratio = float(np.median(v[sustained] / beta[sustained])) if sustained.any() else MF_RATIO
-    if lanes is not None:
-        onsets, dynamics, ratio_of = lanes
-        level_of_note = dynamics[int(np.argmin(np.abs(onsets - note.t0)))]
+def _lanes(score, config):
+    if score is None:
+        return None
+    from pipelines.perform.config import dynamic_table, load_config
+
+    cfg = config or load_config()
+    return (score["onset"].to_numpy(np.float64), score["dynamic"].to_numpy(np.float64),
+            lambda lvl: dynamic_table(cfg, "velocity", lvl) / dynamic_table(cfg, "beta", lvl))
+
+
+def _per_hop_slips(diagnostics: pd.DataFrame, n: int, sample_rate: int) -> dict[int, tuple]:
+    """Per string: slip onsets and sounding period per hop (the teacher's inputs)."""
+    out = {}
+    for s, d in diagnostics.groupby("string", sort=True):
+        k = np.rint(d["time"].to_numpy(np.float64) * sample_rate / HOP).astype(int)
+        ok = (k >= 0) & (k < n)
+        onsets, period = np.zeros(n), np.full(n, np.nan)
+        onsets[k[ok]] = d["slip_onsets"].to_numpy(np.float64)[ok]
+        period[k[ok]] = pd.to_numeric(d["sounding_period"]).to_numpy(np.float64)[ok]
+        out[int(s)] = (onsets, period)
+    return out
+
+
+def _teacher_stats(span: NoteSpan, hops: np.ndarray, ctx: _Context) -> list[RegimeStatistics]:
+    if not hops.size:
+        return []
+    a, b = int(hops[0]), int(hops[-1]) + 1
+    f0 = span.f0_at((hops + 0.5) * HOP / ctx.sample_rate)
+    seg = ctx.audio[a * HOP:]
+    if ctx.slips is not None and span.string in ctx.per_hop:
+        onsets, period = ctx.per_hop[span.string]
+        return hop_statistics(onsets[a:b], period[a:b], seg, f0=f0,
+                              sample_rate=ctx.sample_rate, reference_rms=ctx.ref)
+    return audio_statistics(seg, f0=f0, sample_rate=ctx.sample_rate, reference_rms=ctx.ref)
+
+
+def _bowing(span: NoteSpan, t: np.ndarray, actions: pd.DataFrame | None):
+    """Bow speed, force and beta at times ``t`` (None without actions)."""
+    if actions is None or span.string < 0:
+        return None
+    a = actions[(actions["string"] == span.string) & ~actions["pluck"]]
+    a = a.sort_values("time", kind="stable")
+    return tuple(np.interp(t, a["time"], a[c]) for c in ("bow_velocity", "bow_force", "beta"))
+
+
+def _note_figures(span: NoteSpan, ctx: _Context, previous: NoteSpan | None) -> dict[str, Any]:
+    sr = ctx.sample_rate
+    hops = nm.note_hops(span, sr)
+    sustained = nm.sustained_hops(span, hops, sr, ctx.actions, ctx.margin, ctx.spans)
+    start = span.t0
+    if ctx.slips is not None:
+        helm, attack = nm.from_slips(span, ctx.slips.onsets.get(span.string, np.zeros(0)),
+                                     hops, sr)
+    else:
+        if ctx.margin > 0:
+            start = nm.audio_onset(span, previous, ctx.pre, sr, ctx.margin)
+        helm, attack, _ = nm.from_waveform(span, ctx.pre, hops, sr, start)
+    blocked = nm.attack_blocked(span, ctx.actions, ctx.spans)
+    stats = _teacher_stats(span, hops, ctx)
+    t = (hops + 0.5) * HOP / sr
+    bowing = _bowing(span, t, ctx.actions)
+    if bowing is not None:
+        v, force, beta = np.abs(bowing[0]), bowing[1], bowing[2]
+        ratio = [force[i] / reference_force(ctx.string_refs[span.string], max(v[i], 1e-3),
+                                            beta[i]) for i in range(hops.size)]
+        lane_ratio = float(np.median(v[sustained] / beta[sustained])) if sustained.any() \
+            else MF_RATIO
+    else:
+        ratio, lane_ratio = [1.0] * hops.size, MF_RATIO
+    classes = np.array([judge(st, force_ratio=r) for st, r in zip(stats, ratio, strict=True)],
+                       np.int64).reshape(-1)
+    if ctx.lanes is not None:
+        onsets, dynamics, ratio_of = ctx.lanes
+        level_of_note = dynamics[int(np.argmin(np.abs(onsets - span.t0)))]
         lane_ratio = float(ratio_of(np.array([level_of_note]))[0])
     target = 20.0 * np.log10(max(lane_ratio, 1e-6) / MF_RATIO)
-    hist = np.bincount(classes, minlength=6)[1:]
+    cents = np.array([st.pitch_error_cents for st in stats])[sustained] if stats else []
+    level = np.array([st.level_db for st in stats])[sustained] if stats else np.zeros(0)
+    periodic = np.array([st.acf_t0 >= 0.5 and abs(st.pitch_error_cents) <= 100.0
+                         for st in stats], bool)
     return {
-        "string": int(note.string), "semitones": float(note.semitones),
-        "start": round(float(note.t0), 4), "end": round(float(note.t1), 4),
-        "reached_helmholtz": bool(helm.any()),
-        "attack_ms": attack,
+        "string": span.string, "semitones": span.semitones,
+        "start": float(span.t0), "end": float(span.t1), "attack_from": float(start),
+        "reached_helmholtz": bool(np.isfinite(attack)),
+        "attack_ms": float("nan") if blocked else float(attack * 1000.0),
+        "double_stop_attack": blocked,
         "helmholtz_share": float(helm[sustained].mean()) if sustained.any() else float("nan"),
         "sustained_hops": int(sustained.sum()),
-        "pitch_error_cents_median": float(np.nanmedian(cents)) if np.isfinite(cents).any()
-        else float("nan"),
+        "periodic_hops": int(periodic[sustained].sum()) if stats else 0,
+        "pitch_error_cents_median": float(np.nanmedian(cents))
+        if np.isfinite(np.asarray(cents, np.float64)).any() else float("nan"),
         "level_error_db_median": float(np.median(level) - target) if level.size
         else float("nan"),
-        "class_histogram": {str(c): int(n) for c, n in zip(range(1, 6), hist, strict=True)},
-        "sustained_class_histogram": {
-            str(c): int(n) for c, n in zip(range(1, 6), np.bincount(
-                classes[sustained], minlength=6)[1:], strict=True)},
+        "class_histogram": _histogram(classes),
+        "sustained_class_histogram": _histogram(classes[sustained] if classes.size
+                                                else classes),
     }
+
+
+def _histogram(classes: np.ndarray) -> dict[str, int]:
+    counts = np.bincount(classes, minlength=6)[1:6]
+    return {str(c): int(n) for c, n in zip(range(1, 6), counts, strict=True)}
 
 
 def piece_figures(notes: list[dict[str, Any]]) -> dict[str, Any]:
@@ -254,8 +302,11 @@ def piece_figures(notes: list[dict[str, Any]]) -> dict[str, Any]:
     sus = {str(c): int(sum(n["sustained_class_histogram"][str(c)] for n in notes))
            for c in range(1, 6)}
     total_sus = sum(sus.values())
+    periodic = float(sum(n.get("periodic_hops", 0) for n in notes))
     return {
         "notes": len(notes),
+        "sustained_hops": int(sustained.sum()),
+        "periodic_share": periodic / sustained.sum() if sustained.sum() else float("nan"),
         "reached_helmholtz_share": float(np.mean([n["reached_helmholtz"] for n in notes]))
         if notes else float("nan"),
         "helmholtz_share": float(np.sum(shares[ok] * sustained[ok]) / sustained[ok].sum())
@@ -270,3 +321,6 @@ def piece_figures(notes: list[dict[str, Any]]) -> dict[str, Any]:
         "sustained_class_histogram": sus,
         "sustained_class3_share": sus["3"] / total_sus if total_sus else float("nan"),
     }
+
+
+__all__ = ["check_length", "check_playable", "evaluate", "find_notes", "piece_figures"]

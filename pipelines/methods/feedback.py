@@ -288,7 +288,8 @@ def diagnostics_table(log: PerformanceLog, sample_rate: int) -> pd.DataFrame:
     period = [d.sounding_period if math.isfinite(d.sounding_period) else None for d in diags]
     columns = [time.tolist(), string[order].tolist(), [d.slip_onsets for d in diags],
                [d.slipping_share for d in diags], [d.contact_share for d in diags],
-               [d.mean_slip_speed for d in diags], period]
+               [d.mean_slip_speed for d in diags], period,
+               [d.onset_times.tolist() for d in diags]]
     return pd.DataFrame(dict(zip(CONTACT_DIAGNOSTICS.column_names, columns, strict=True)))
 
 
