@@ -69,3 +69,14 @@ def test_refuses_bad_input():
         fit_cwm(np.zeros((3, 1)), np.zeros((3, 1)), 5)
     with pytest.raises(ParameterError):
         fit_cwm(np.full((3, 1), np.nan), np.zeros((3, 1)), 1)
+
+
+def test_predictions_stay_inside_the_training_box():
+    """A local linear model would extrapolate 100 x to 1000 at x = 10; the model clamps the
+    input to the training range [0, 1] and so predicts at most the largest output seen."""
+    rng = np.random.default_rng(1)
+    x = rng.uniform(0.0, 1.0, size=(300, 1))
+    model = fit_cwm(x, 100.0 * x, 2, seed=0)
+    far = model.predict([[10.0], [-5.0]])
+    assert far[0, 0] == pytest.approx(100.0 * x.max(), abs=1.0)
+    assert far[1, 0] == pytest.approx(100.0 * x.min(), abs=1.0)

@@ -101,3 +101,4 @@ def test_clear_errors(db):
         engine.render(phrase([0]), diagnostics=True)
     with pytest.raises(ParameterError, match="cws"):
         get_engine("cws", "violin", audio_db=db, attack_seconds=1.0)
+

@@ -63,6 +63,11 @@ class ClusterWeightedModel:
         Output variances ``s_k`` (standardised).
     log_likelihood : tuple of float
         Total log-likelihood of the training data at each EM iteration.
+    x_range, y_range : np.ndarray [shape=(2, D) and (2, E)], optional
+        Lowest and highest training inputs and outputs: :meth:`predict` clamps inputs to
+        the first and its outputs to the second (a local *linear* model extrapolates
+        without bound: a long note's time since onset would otherwise predict an energy
+        of hundreds of dB).
     """
 
     x_mean: np.ndarray
@@ -75,6 +80,8 @@ class ClusterWeightedModel:
     coefficients: np.ndarray
     variances: np.ndarray
     log_likelihood: tuple[float, ...]
+    x_range: np.ndarray | None = None
+    y_range: np.ndarray | None = None
 
     @property
     def n_clusters(self) -> int:
@@ -109,11 +116,14 @@ class ClusterWeightedModel:
         >>> bool(np.allclose(model.predict([[0.5]]), 2.5, atol=1e-3))
         True
         """
+        x = np.atleast_2d(np.asarray(x, dtype=np.float64))
+        if self.x_range is not None:
+            x = np.clip(x, self.x_range[0], self.x_range[1])
         z = self._zx(x)
         log_w = self.log_input_density(x)
         w = np.exp(log_w - _logsumexp(log_w)[:, None])
-        y = np.einsum("nk,nke->ne", w, self._local(z))
-        return y * self.y_scale + self.y_mean
+        y = np.einsum("nk,nke->ne", w, self._local(z)) * self.y_scale + self.y_mean
+        return y if self.y_range is None else np.clip(y, self.y_range[0], self.y_range[1])
 
     def most_likely_cluster(self, x: np.ndarray) -> np.ndarray:
         """Eq. 4: ``argmax_k p(x | c_k) p(c_k)`` per row, shape (n,)."""
@@ -237,7 +247,9 @@ def fit_cwm(x: np.ndarray, y: np.ndarray, n_clusters: int, *, seed: int = 0,
             break
         model = _m_step(z, zy, np.exp(log_j - total[:, None]), reg, base)
     return ClusterWeightedModel(xm, xs, ym, ys, model.weights, model.means, model.covariances,
-                                model.coefficients, model.variances, tuple(history))
+                                model.coefficients, model.variances, tuple(history),
+                                np.stack([x.min(axis=0), x.max(axis=0)]),
+                                np.stack([y.min(axis=0), y.max(axis=0)]))
 
 
 __all__ = ["ClusterWeightedModel", "fit_cwm"]
