@@ -24,10 +24,10 @@ null with the reason when fluidsynth or the soundfont is missing) and the real r
 - ``real_time_factor``: audio seconds per second of ``engine.render`` (the model trained
   before; training time reported apart).
 
-STAND-IN: until ``data_schemas.audio_frames.read_audio_database`` is merged, the database of
-the shared recordings is built here in memory by :func:`standin_audio_database` (pYIN at
-22.05 kHz, hop 256, RMS energy, librosa's centroid, notes from the alignments). At the merge
-swap it for ``read_audio_database(DB)`` built by ``arco build-db --audio``.
+Without ``--audio-db`` the database of the recordings is built first by
+:func:`gesture_db.audio_build.build_audio_database` (what ``arco build-db --audio`` runs) into
+``--cache DIR`` (default: a temporary folder; a kept cache is reused and only changed
+recordings are analysed again), and each fold leaves its recording out of it.
 
 ``--json`` prints exactly one JSON object on stdout; progress goes to stderr.
 """
@@ -40,7 +40,6 @@ import os
 import sys
 import tempfile
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -63,29 +62,13 @@ def say(*parts: Any) -> None:
     print(*parts, file=sys.stderr, flush=True)
 
 
-def shared_recordings() -> list[recordings.Recording]:
+def shared_folder() -> Path:
+    """The shared bach-violin folder."""
     for c in (os.environ.get("ARCO_SHARED_DATA"), ROOT.parent / "shared" / "data",
               "/work/shared/data"):
         if c and (Path(c) / "bach-violin" / "notes").is_dir():
-            return recordings.dataset_recordings(Path(c) / "bach-violin")
-    raise ParameterError("bach-violin data not found: set ARCO_SHARED_DATA or give --audio-db")
-
-
-@dataclass(frozen=True)
-class StandinAudioDatabase:
-    """STAND-IN for ``data_schemas.audio_frames.AudioDatabase`` (same attributes)."""
-
-    root: Path
-    sample_rate: int
-    hop_s: float
-    frames: pd.DataFrame
-    notes: pd.DataFrame
-    audio_paths: dict[str, Path]
-    audio: dict[str, np.ndarray]
-
-    def load_audio(self, recording: str) -> np.ndarray:
-        return self.audio[recording].astype(np.float32)
-
+            return Path(c) / "bach-violin"
+    raise ParameterError("bach-violin data not found: set ARCO_SHARED_DATA or give --data")
 
 
 def without(db: Any, recording: str) -> Any:
@@ -100,63 +83,6 @@ def without(db: Any, recording: str) -> Any:
         db, frames=db.frames[db.frames["recording"].isin(keep)].reset_index(drop=True),
         notes=db.notes[db.notes["recording"].isin(keep)].reset_index(drop=True),
         audio_paths={r: db.audio_paths[r] for r in keep})
-
-
-def _note_of_frames(times: np.ndarray, notes: pd.DataFrame) -> np.ndarray:
-    """Per frame: the latest-starting aligned note sounding then (-1 between notes)."""
-    out = np.full(times.size, -1, np.int32)
-    for i, (s, e) in enumerate(zip(notes["onset_s"], notes["offset_s"], strict=True)):
-        out[(times >= s) & (times < e)] = i
-    return out
-
-
-def _analyse(rec: recordings.Recording, seconds: float | None) -> tuple[pd.DataFrame, ...]:
-    """STAND-IN analysis of one recording: frames, notes and the 44.1 kHz audio."""
-    import librosa
-
-    audio = recordings.read_audio(rec.audio, seconds=seconds, sample_rate=SAMPLE_RATE)
-    low = librosa.resample(audio, orig_sr=SAMPLE_RATE, target_sr=ANALYSIS_RATE)
-    f0, voiced, prob = librosa.pyin(low, fmin=180.0, fmax=2500.0, sr=ANALYSIS_RATE,
-                                    frame_length=1024, hop_length=ANALYSIS_HOP)
-    centroid = librosa.feature.spectral_centroid(y=low, sr=ANALYSIS_RATE, n_fft=1024,
-                                                 hop_length=ANALYSIS_HOP)[0]
-    times = librosa.frames_to_time(np.arange(f0.size), sr=ANALYSIS_RATE,
-                                   hop_length=ANALYSIS_HOP)
-    rms = librosa.feature.rms(y=audio, frame_length=2048, hop_length=512)[0]
-    energy = 20 * np.log10(np.interp(times, librosa.frames_to_time(
-        np.arange(rms.size), sr=SAMPLE_RATE, hop_length=512), rms) + 1e-9)
-    aligned = recordings.read_aligned_notes(rec.notes, rec.alignment)
-    if seconds is not None:
-        aligned = recordings.first_seconds(aligned, seconds)
-    notes = pd.DataFrame({"recording": rec.name, "note": np.arange(len(aligned), dtype=np.int32),
-                          "onset_s": aligned["start_s"], "offset_s": aligned["end_s"],
-                          "midi_pitch": aligned["midi_pitch"].astype(np.float32),
-                          "velocity": aligned["velocity"].astype(np.float32)})
-    frames = pd.DataFrame({
-        "recording": rec.name, "frame": np.arange(f0.size, dtype=np.int32), "time_s": times,
-        "f0_hz": f0.astype(np.float32), "voiced": voiced.astype(bool),
-        "voiced_probability": prob.astype(np.float32), "energy_db": energy.astype(np.float32),
-        "centroid_hz": centroid[: f0.size].astype(np.float32),
-        "note": _note_of_frames(times, notes)})
-    return frames, notes, audio
-
-
-def standin_audio_database(recs: list[recordings.Recording],
-                           seconds: float | None) -> StandinAudioDatabase:
-    """STAND-IN for ``read_audio_database``: analyse the recordings in memory."""
-    frames, notes, audio = [], [], {}
-    for rec in recs:
-        t0 = time.perf_counter()
-        f, n, a = _analyse(rec, seconds)
-        frames.append(f)
-        notes.append(n)
-        audio[rec.name] = a
-        say(f"  analysed {rec.name}: {len(f)} frames, {len(n)} notes "
-            f"({time.perf_counter() - t0:.0f} s)")
-    return StandinAudioDatabase(Path("<stand-in>"), SAMPLE_RATE, ANALYSIS_HOP / ANALYSIS_RATE,
-                                pd.concat(frames, ignore_index=True),
-                                pd.concat(notes, ignore_index=True),
-                                {r.name: r.audio for r in recs}, audio)
 
 
 def monophonic(table: pd.DataFrame) -> pd.DataFrame:
@@ -295,29 +221,36 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         "default: the shared bach-violin folder)")
     p.add_argument("--seconds", type=float, default=30.0,
                    help="render the left-out recording's first N seconds (default 30)")
-    p.add_argument("--train-seconds", type=float, default=None,
-                   help="stand-in database: analyse only each recording's first N seconds")
+    p.add_argument("--cache", metavar="DIR",
+                   help="build (and keep) the audio-frame database here (default: temporary)")
     p.add_argument("--clusters", type=int, default=12, help="clusters (default 12)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", metavar="DIR", help="keep the loudness-normalised renders")
     return p.parse_args(argv)
 
 
-def open_database(args: argparse.Namespace, recs: list[recordings.Recording]) -> Any:
-    if args.audio_db:
-        from data_schemas.audio_frames import read_audio_database  # after the merge
+def open_database(args: argparse.Namespace, folder: Path, tmp: Path) -> Any:
+    """The audio-frame database: ``--audio-db``, else built from ``folder``."""
+    from data_schemas.audio_frames import read_audio_database
 
+    if args.audio_db:
         return read_audio_database(args.audio_db)
-    say("STAND-IN audio database (pYIN in memory):")
-    return standin_audio_database(recs, args.train_seconds)
+    from gesture_db.audio_build import build_audio_database
+
+    out = Path(args.cache) if args.cache else tmp / "audio-db"
+    t0 = time.perf_counter()
+    build_audio_database([folder], out, progress=False)
+    say(f"audio-frame database {out} built in {time.perf_counter() - t0:.0f} s")
+    return read_audio_database(out)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     started = time.perf_counter()
-    recs = recordings.dataset_recordings(args.data) if args.data else shared_recordings()
-    db = open_database(args, recs)
+    folder = Path(args.data) if args.data else shared_folder()
+    recs = recordings.dataset_recordings(folder)
     per = {}
     with tempfile.TemporaryDirectory() as tmp:
+        db = open_database(args, folder, Path(tmp))
         for rec in recs:
             say(f"{rec.name} left out:")
             per[rec.name] = leave_one_out(db, rec, args, Path(tmp))
@@ -325,9 +258,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                                     if p[src].get(k) is not None] or [np.nan]))
                   for k in ("mfcc_frechet", "clicks", "real_time_factor")}
             for src in ("cws", "fluidr3")}
-    return clean({"settings": {"seconds": args.seconds, "train_seconds": args.train_seconds,
-                               "clusters": args.clusters, "seed": args.seed,
-                               "database": args.audio_db or "stand-in (pYIN in memory)"},
+    return clean({"settings": {"seconds": args.seconds, "clusters": args.clusters,
+                               "seed": args.seed,
+                               "database": args.audio_db or args.cache or "built (temporary)"},
                   "recordings": per, "mean": mean,
                   "elapsed_s": time.perf_counter() - started})
 
