@@ -139,7 +139,11 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     cfg = config["loudness"]
     if not cfg["enabled"]:
         return 0
-    cal = Calibration(load_calibration(), instrument)
+    table = load_calibration()
+    if warnings is not None and set(table["key"]) != {calibration_key(config)}:
+        warnings.append("the loudness calibration was measured with other string physics or "
+                        "bow lanes (run bench/calibrate_loudness.py)")
+    cal = Calibration(table, instrument)
     short = 0
     for e in events:
         if e.pizz:

@@ -105,7 +105,9 @@ def integrated_loudness(audio: np.ndarray, sample_rate: float) -> float:
     block, step = int(round(0.4 * sample_rate)), int(round(0.1 * sample_rate))
     if z.size < block:
         return float(_lufs(np.mean(z * z))) if z.size else SILENCE
-    power = np.convolve(z * z, np.ones(block) / block, mode="valid")[::step]
+    cum = np.concatenate([[0.0], np.cumsum(z * z)])
+    starts = np.arange(0, z.size - block + 1, step)
+    power = (cum[starts + block] - cum[starts]) / block
     keep = _lufs(power) > -70.0
     if not keep.any():
         return SILENCE
@@ -149,3 +151,39 @@ def note_loudness(audio: np.ndarray, sample_rate: float, starts: np.ndarray,
     n = np.maximum(b - a, 0)
     ms = np.where(n > 0, (cum[np.maximum(b, a)] - cum[a]) / np.maximum(n, 1), 0.0)
     return _lufs(ms)
+
+
+def level_range_db(audio: np.ndarray, sample_rate: float, table, *,
+                   percentiles: tuple[float, float] = (10.0, 90.0)) -> float:
+    """Per-note level range: the 10th to 90th percentile of the notes' loudness, dB.
+
+    Parameters
+    ----------
+    audio : np.ndarray [shape=(n,)]
+    sample_rate : float, Hz
+    table : pandas.DataFrame
+        Notes with ``start_s`` and ``end_s`` (s); notes overlapping others are measured too
+        (their segment holds both).
+    percentiles : (float, float)
+
+    Returns
+    -------
+    float, dB
+        NaN with fewer than 5 audible notes (above -70 LUFS).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> t = np.arange(10 * 8000) / 8000
+    >>> gain = np.repeat(10.0 ** (-np.arange(10) / 20.0), 8000)   # 0, -1, ... -9 dB
+    >>> notes = pd.DataFrame({"start_s": np.arange(10.0), "end_s": np.arange(10.0) + 1})
+    >>> round(level_range_db(gain * np.sin(2 * np.pi * 997 * t), 8000, notes), 1)
+    7.2
+    """
+    level = note_loudness(audio, sample_rate, table["start_s"].to_numpy(),
+                          table["end_s"].to_numpy())
+    level = level[level > -70.0]
+    if level.size < 5:
+        return float("nan")
+    lo, hi = np.percentile(level, percentiles)
+    return float(hi - lo)
