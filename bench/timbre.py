@@ -23,7 +23,9 @@ and every source, the recording (``real``) included, is measured the same way by
 MFCC-frame Frechet distance to the recording, spectral centroid, harmonics 6-10 and 11-20 re
 harmonic 1, flatness, harmonic-to-noise, octave-band LTAS (as render minus real), and by
 :func:`pipelines.reports.vibrato.vibrato_figures` (YIN pitch of the monophonic notes of at
-least 0.31 s: share with vibrato >= 3 cents, extent, rate, intonation spread). The
+least 0.31 s: share with vibrato >= 3 cents, extent, rate, intonation spread), and
+:func:`pipelines.reports.loudness.level_range_db` (per-note BS.1770 loudness, 10th to 90th
+percentile, ``level_range_db``). The
 ``real`` entry's ``mfcc_frechet`` is the floor: the mean distance from that recording to the
 recordings of other performers (performer = file name up to the first ``_``).
 
@@ -47,11 +49,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from data_schemas.errors import ArcoError, ParameterError  # noqa: E402
-from pipelines.reports import baselines, recordings, timbre, vibrato  # noqa: E402
+from pipelines.reports import baselines, loudness, recordings, timbre, vibrato  # noqa: E402
 
 SAMPLE_RATE = 44100
 VIBRATO = ("vibrato_share", "vibrato_extent_cents", "vibrato_rate_hz",
-           "intonation_spread_cents")
+           "intonation_spread_cents", "level_range_db")
 SOURCES = ("real", "rules", "fluidr3", "sawtooth", "frames")
 FIGURES = ("mfcc_frechet", "centroid_hz", "h6_10_db", "h11_20_db", "flatness_db", "hnr_db",
            *VIBRATO, "click_ratio", "click_p999")
@@ -261,6 +263,7 @@ def measure_recording(rec: recordings.Recording, args: argparse.Namespace, rende
     real.figures.update(vibrato.vibrato_figures(real_audio, SAMPLE_RATE, table))
     real.figures.update(clicks(real_audio))
     table.attrs["recording"] = rec.name
+    real.figures["level_range_db"] = loudness.level_range_db(real_audio, SAMPLE_RATE, table)
     result: dict[str, Any] = {
         "audio": str(rec.audio), "notes": len(table), "dropped_notes": table.attrs["dropped"],
         "figures": {"real": {"mfcc_frechet": None, **real.figures}},
@@ -278,6 +281,7 @@ def measure_recording(rec: recordings.Recording, args: argparse.Namespace, rende
         m = timbre.measure(audio, SAMPLE_RATE, table)
         m.figures.update(vibrato.vibrato_figures(audio, SAMPLE_RATE, table))
         m.figures.update(clicks(audio))
+        m.figures["level_range_db"] = loudness.level_range_db(audio, SAMPLE_RATE, table)
         result["figures"][name] = {"mfcc_frechet": timbre.frechet_distance(m.mfcc, real.mfcc),
                                    **m.figures}
         result["ltas_db"][name] = m.ltas_db

@@ -17,6 +17,8 @@ CFG = load_config()
 # The notation rules are tested exact: no intonation, no vibrato (tests/test_expression.py).
 CFG["vibrato"]["enabled"] = False
 CFG["intonation"].update(sigma=0.0, semitone_step=0.0)
+# ... and the lanes as written (the loudness evening-out moves them: tests/test_loudness.py).
+CFG["loudness"]["enabled"] = False
 L = CFG["instruments"]["violin"]["bow_length"]
 FERMATA_SHIFT = 2.0 * (CFG["articulations"]["fermata_stretch"] - 1.0)
 

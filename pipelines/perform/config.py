@@ -176,9 +176,28 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
         if not _is_number(value) or not 0 <= value <= 1:
             raise ParameterError(f"{source}: bow_regions.{key}={value!r} must be in [0, 1]")
     _validate_expression(config, source)
+    _validate_loudness(config, source)
     for key in ("pitch_sigma", "onset_sigma"):
         _numbers(config["skill"][key], f"skill.{key} (levels 0..3)", 4, ">= 0",
                  _upper("skill", key), source)
+
+
+def _validate_loudness(config: dict[str, Any], source: str) -> None:
+    """``[loudness]``: a switch, a target in LUFS, a non-decreasing level curve, a shift."""
+    cfg = config["loudness"]
+    if not isinstance(cfg["enabled"], bool):
+        raise ParameterError(f"{source}: loudness.enabled={cfg['enabled']!r} must be true or "
+                             "false")
+    if not _is_number(cfg["mf"]) or not -70.0 <= cfg["mf"] <= 0.0:
+        raise ParameterError(f"{source}: loudness.mf={cfg['mf']!r} must be in [-70, 0] LUFS")
+    curve = cfg["level_db"]
+    ok = isinstance(curve, list) and len(curve) == _N_LEVELS and all(map(_is_number, curve))
+    if not ok or np.any(np.diff(curve) < 0) or np.any(np.abs(curve) > 60.0):
+        raise ParameterError(f"{source}: loudness.level_db must hold {_N_LEVELS} "
+                             f"non-decreasing numbers within +-60 dB, got {curve!r}")
+    if not _is_number(cfg["max_shift"]) or not 0.0 <= cfg["max_shift"] <= 9.0:
+        raise ParameterError(f"{source}: loudness.max_shift={cfg['max_shift']!r} must be in "
+                             "[0, 9] levels")
 
 
 _VIBRATO_POSITIVE = ("rate", "onset_delay", "fade_in", "min_duration")

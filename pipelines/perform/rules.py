@@ -28,6 +28,7 @@ from data_schemas.instruments import instrument_facts
 from pipelines.perform.events import Event, Performance
 from pipelines.perform.expression import assign_vibrato, intonation_cents
 from pipelines.perform.instruments import choose_strings, fit_range
+from pipelines.perform.loudness import even_out
 from pipelines.perform.ornaments import assign_ornaments, assign_portamenti, time_graces
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
@@ -351,7 +352,9 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
     Returns
     -------
     Performance
-        The actions table, the played events and warnings.
+        The actions table, the played events (their ``dynamic`` is the bow lane level each
+        was played at after evening out loudness, :mod:`pipelines.perform.loudness`) and
+        warnings.
     """
     from pipelines.perform import bowing
 
@@ -364,6 +367,7 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         transpose_octaves=transpose_octaves)
     inst_cfg = config["instruments"][name]
     warnings: list[str] = []
+    even_out(events, name, config, warnings)  # the marked dynamic -> the bowed lane level
     if strings["rolled"].any():
         warnings.append(f"part {notes['part_name'].iloc[0]!r}: {int(strings['rolled'].sum())} "
                         "chord notes cannot be bowed at once and are rolled")

@@ -1,0 +1,131 @@
+"""Measure the instrument model's loudness at the rules' bow lanes (the rules' calibration).
+
+Every instrument plays steady detached notes with the modal engine (seed 0, 44.1 kHz, the
+synthesized body): at mf on every string and finger position 0..27 semitones, and at every
+level pppp..ffff on positions 0, 5, 12 and 19 of every string (the level curve). Each note is
+bowed for 0.6 s at the lane's beta, velocity and force (force in multiples of the string's
+reference force, as the rules play), stopped notes with the rules' mf vibrato (a sine of
+``[vibrato] extent`` cents at ``rate``: a resonance narrower than the vibrato is heard as the
+vibrato sweeps it), open strings without; its loudness is the ungated BS.1770 loudness from 0.2 s
+to its end (``pipelines.reports.loudness``). The table goes to
+``pipelines/perform/loudness_calibration.parquet`` (``data_schemas.loudness``) with the hash of
+the string physics, instrument facts and lanes it was measured with.
+
+``--json`` prints one JSON object on stdout (spread of the mf loudness per instrument);
+progress goes to stderr. About 2-4 minutes on one core.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from data_schemas.instruments import finger_ratio, limits  # noqa: E402
+from pipelines.perform.config import dynamic_table, load_config  # noqa: E402
+from pipelines.perform.loudness import TABLE_PATH, calibration_key  # noqa: E402
+from pipelines.perform.rules import string_force_factors  # noqa: E402
+
+SAMPLE_RATE = 44100
+NOTE, GAP, SKIP = 0.6, 0.3, 0.2  # s bowed, s between notes, s of attack left out
+FRAME = 0.005  # s between control frames (the rules' [frames] interval)
+SEMITONES = np.arange(28.0)
+CURVE_SEMITONES = (0.0, 5.0, 12.0, 19.0)
+INSTRUMENTS = ("violin", "viola", "cello")
+
+
+def grid() -> pd.DataFrame:
+    """(string, semitone, level) of every calibration note of one instrument."""
+    rows = [(s, q, 5.0) for s in range(4) for q in SEMITONES]
+    rows += [(s, q, float(lv)) for s in range(4) for q in CURVE_SEMITONES
+             for lv in range(10) if lv != 5]
+    return pd.DataFrame(rows, columns=["string", "semitone", "level"])
+
+
+def steady_actions(instrument: str, notes: pd.DataFrame, config: dict) -> pd.DataFrame:
+    """An actions table of one steady detached note per row of ``notes``."""
+    ref = string_force_factors(instrument)
+    vib = config["vibrato"]
+    frames = []
+    for k, n in enumerate(notes.itertuples()):
+        t0 = k * (NOTE + GAP)
+        level = np.array([n.level])
+        v = float(dynamic_table(config, "velocity", level)[0])
+        f = float(dynamic_table(config, "force", level)[0]) * ref[n.string]
+        b = float(dynamic_table(config, "beta", level)[0])
+        t = np.concatenate([[t0], np.arange(t0 + 0.03, t0 + NOTE, FRAME), [t0 + NOTE,
+                                                                             t0 + NOTE + 0.02]])
+        on = np.ones(t.size)
+        on[0] = on[-1] = 0.0
+        # Stopped notes with the rules' vibrato at mf (open strings get none), so that the
+        # calibration hears a resonance the way a vibrato sweeps it.
+        cents = 0.0 if n.semitone == 0 else vib["extent"] * np.sin(
+            2 * np.pi * vib["rate"] * (t - t0))
+        ratio = np.minimum(finger_ratio(n.semitone + cents / 100.0), limits().max_finger_ratio)
+        d = 1.0 if k % 2 == 0 else -1.0
+        frames.append(pd.DataFrame({
+            "time": t, "string": np.full(t.size, n.string, np.int8),
+            "finger_ratio": ratio.astype(np.float32),
+            "bow_force": f * on, "bow_velocity": d * v * on, "beta": np.full(t.size, b),
+            "bow_position": np.full(t.size, 0.5), "pluck": np.zeros(t.size, bool)}))
+    return pd.concat(frames, ignore_index=True).sort_values("time", kind="stable")
+
+
+def measure(instrument: str, config: dict) -> pd.DataFrame:
+    """Loudness (LUFS) of every calibration note of ``instrument``."""
+    from pipelines.reports.loudness import note_loudness
+    from synth import render_actions
+
+    notes = grid()
+    audio = render_actions(steady_actions(instrument, notes, config), instrument=instrument,
+                           sample_rate=SAMPLE_RATE, seed=0)
+    starts = np.arange(len(notes)) * (NOTE + GAP)
+    notes["loudness"] = note_loudness(audio, SAMPLE_RATE, starts + SKIP, starts + NOTE,
+                                      skip=0.0)
+    notes.insert(0, "instrument", instrument)
+    return notes
+
+
+def main(argv: list[str] | None = None) -> int:
+    from data_schemas.io import write_table
+    from data_schemas.loudness import LOUDNESS_CALIBRATION
+
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.add_argument("-o", "--out", default=str(TABLE_PATH), help="table to write")
+    args = p.parse_args(argv)
+    config = load_config()
+    key = calibration_key(config)
+    t0 = time.perf_counter()
+    tables = []
+    for name in INSTRUMENTS:
+        print(f"calibrating {name} ...", file=sys.stderr, flush=True)
+        tables.append(measure(name, config))
+    table = pd.concat(tables, ignore_index=True)
+    table["key"] = key
+    write_table(table, args.out, LOUDNESS_CALIBRATION)
+    mf = table[table["level"] == 5.0]
+    summary = {
+        "key": key, "table": args.out, "elapsed_s": round(time.perf_counter() - t0, 1),
+        "mf_lufs": {n: {"median": round(float(g["loudness"].median()), 2),
+                        "min": round(float(g["loudness"].min()), 2),
+                        "max": round(float(g["loudness"].max()), 2)}
+                    for n, g in mf.groupby("instrument")},
+    }
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(summary, file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
