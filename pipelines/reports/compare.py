@@ -289,12 +289,8 @@ def write_media(output: MethodOutput, out: Path, stem: str, method: str, *,
     return {"audio": str(wav.relative_to(out)), "plot": str(png.relative_to(out))}
 
 
-__all__ = ["FIGURES", "METHODS", "Excerpt", "MethodOutput", "PartOutput", "check_methods",
-           "compare", "evaluate_output", "heldout_excerpts", "render_method", "run_job",
-           "seed_list", "write_media"]
-
-
-def heldout_excerpts(path: str | os.PathLike | None = None, data_dir=None):
+def heldout_excerpts(path: str | os.PathLike | None = None, data_dir=None, *,
+                     first: int | None = None, measures: int | None = None):
     """The held-out protocol and its excerpts (all parts) as :class:`Excerpt` records.
 
     Parameters
@@ -303,6 +299,10 @@ def heldout_excerpts(path: str | os.PathLike | None = None, data_dir=None):
         Protocol file (default: the shipped ``pipelines/data/heldout.toml``).
     data_dir : path-like, optional
         Shared data folder (default: :func:`pipelines.reports.heldout.shared_data_dir`).
+    first : int, optional
+        Only the protocol's first ``first`` excerpts (a quick run).
+    measures : int, optional
+        Only the first ``measures`` measures of each excerpt (a quick run).
 
     Raises
     ------
@@ -313,5 +313,14 @@ def heldout_excerpts(path: str | os.PathLike | None = None, data_dir=None):
 
     protocol = load_protocol(path)
     files = resolve(protocol, data_dir)
-    return protocol, [Excerpt(e.id, str(f), e.start_measure, e.end_measure, None, True)
-                      for e, f in zip(protocol.excerpts, files, strict=True)]
+    out = []
+    for e, f in list(zip(protocol.excerpts, files, strict=True))[:first]:
+        end = e.end_measure if measures is None else min(e.end_measure,
+                                                         e.start_measure + measures - 1)
+        out.append(Excerpt(e.id, str(f), e.start_measure, end, None, True))
+    return protocol, out
+
+
+__all__ = ["FIGURES", "METHODS", "Excerpt", "MethodOutput", "PartOutput", "check_methods",
+           "compare", "evaluate_output", "heldout_excerpts", "render_method", "run_job",
+           "seed_list", "write_media"]

@@ -31,6 +31,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="play the held-out protocol's excerpts (default: the shipped "
                         "pipelines/data/heldout.toml) from $ARCO_SHARED_DATA or "
                         "../shared/data")
+    p.add_argument("--excerpts", type=positive_int, metavar="N",
+                   help="with --heldout: only the protocol's first N excerpts (a quick run)")
+    p.add_argument("--measures", type=positive_int, metavar="M",
+                   help="with --heldout: only the first M measures of each excerpt")
     p.add_argument("--methods", default=DEFAULT_METHODS,
                    help="comma-separated methods (arco render --help lists them)")
     p.add_argument("--db", metavar="DB", help="gesture database (sampling methods)")
@@ -66,9 +70,12 @@ def run(args: argparse.Namespace) -> int:
     if args.heldout is not None:
         if args.scores:
             raise ParameterError("give either SCORE files or --heldout, not both")
-        protocol, scores = heldout_excerpts(None if args.heldout == SHIPPED else args.heldout)
+        protocol, scores = heldout_excerpts(None if args.heldout == SHIPPED else args.heldout,
+                                            first=args.excerpts, measures=args.measures)
         n_seeds = protocol.seeds if n_seeds is None else n_seeds
         title = f"held-out protocol {protocol.name!r} ({protocol.source})"
+    elif args.excerpts is not None or args.measures is not None:
+        raise ParameterError("--excerpts and --measures apply to --heldout")
     elif not args.scores:
         raise ParameterError("give SCORE files or --heldout [PROTOCOL.toml]")
     else:
