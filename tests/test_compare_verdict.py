@@ -149,7 +149,7 @@ def test_verdict_names_a_winner_and_the_figures_that_do_not_separate():
                      "sampling": Interval(0.72, 0.65, 0.8)})
     assert verdict_sentence(s, n_excerpts=4, n_seeds=5) == (
         "On 4 excerpts x 5 seeds, rules beats feedback and sampling on Helmholtz share and "
-        "attack p90; sampling and rules do not separate on class-3 share.")
+        "attack p90; rules and sampling do not separate on class-3 share.")
 
 
 def test_verdict_without_any_separation_and_with_ties():

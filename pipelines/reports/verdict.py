@@ -89,7 +89,8 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
             key = (w, tuple(m for m in per if m != w))
             wins.setdefault(key, []).append(LABELS[fig])
         else:
-            ties.setdefault(tuple(contenders(per, figures[fig])), []).append(LABELS[fig])
+            who = set(contenders(per, figures[fig]))
+            ties.setdefault(tuple(m for m in per if m in who), []).append(LABELS[fig])
     clauses = []
     for (w, others), figs in wins.items():
         clauses.append(f"{w} beats {_join(others)} on {_join(figs)}")
