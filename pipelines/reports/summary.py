@@ -91,6 +91,26 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
     Returns
     -------
     dict
+
+    Examples
+    --------
+    >>> hist = {"1": 0, "2": 0, "3": 9, "4": 1, "5": 0}
+    >>> def job(method, seed, share):
+    ...     note = {"sustained_hops": 10, "helmholtz_share": share, "reached_helmholtz": True,
+    ...             "attack_ms": 30.0, "pitch_error_cents_median": 0.0,
+    ...             "level_error_db_median": 0.0, "sustained_class_histogram": hist,
+    ...             "failures": [], "contexts": ["attack"]}
+    ...     return {"excerpt": "x", "method": method, "seed": seed, "media": None,
+    ...             "figures": {"render_seconds": 1.0, "real_time_factor": 2.0,
+    ...                         "audio_seconds": 2.0}, "notes": [note] * 4}
+    >>> done = [job("a", s, 1.0) for s in (0, 1)] + [job("b", s, 0.5) for s in (0, 1)]
+    >>> r = summarise(done, excerpts=[{"name": "x"}], methods=["a", "b"], seeds=[0, 1])
+    >>> for clause in r["verdict"].split("; "):
+    ...     print(clause)
+    On 1 excerpt x 2 seeds, a beats b on Helmholtz share
+    a and b do not separate on attack p90, class-3 share and class-5 share.
+    >>> r["winners"]["helmholtz_share"], r["summary"]["b"]["helmholtz_share"]["mean"]
+    ('a', 0.5)
     """
     failed = {}
     for r in done:
