@@ -146,6 +146,27 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
     return {**key, "figures": figures, "notes": notes, "media": media}
 
 
+def read_excerpt(e: Excerpt) -> tuple[Any, list[int]]:
+    """The notes of an excerpt's measures (re-timed to 0) and the part indices to play."""
+    from pipelines.score import read_score
+    from pipelines.score.select import choose_parts, select_measures
+
+    notes = select_measures(read_score(e.path), e.start_measure, e.end_measure)
+    return notes, choose_parts(notes, e.part, e.all_parts)
+
+
+def _read_all(excerpts: list[Excerpt], workers: int) -> list[tuple[Any, list[int]]]:
+    """Every excerpt read, on ``workers`` processes when there are several."""
+    if workers <= 1 or len(excerpts) <= 1:
+        return [read_excerpt(e) for e in excerpts]
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=min(workers, len(excerpts)),
+                             mp_context=mp.get_context("spawn")) as pool:
+        return list(pool.map(read_excerpt, excerpts))
+
+
 def _run_all(jobs: list[dict[str, Any]], workers: int, progress: bool) -> list[dict]:
     """Every job, serially or on ``workers`` processes, with a progress bar."""
     from tqdm import tqdm
@@ -212,8 +233,6 @@ def compare(scores: Sequence[str | os.PathLike | Excerpt], out_dir: str | os.Pat
         The content of ``results.json`` (:func:`pipelines.reports.summary.summarise`).
     """
     from pipelines.reports.html import write_report
-    from pipelines.score import read_score
-    from pipelines.score.select import choose_parts, select_measures
 
     say = log or (lambda *_: None)
     check_methods(methods, db=db, models=models)
@@ -227,10 +246,8 @@ def compare(scores: Sequence[str | os.PathLike | Excerpt], out_dir: str | os.Pat
     if any(needs_db.values()):
         _database(db, search_config)  # a missing or bad database fails before any work
     jobs = []
-    for e in excerpts:
-        say(f"{e.name}: reading {e.path}")
-        notes = select_measures(read_score(e.path), e.start_measure, e.end_measure)
-        parts = choose_parts(notes, e.part, e.all_parts)
+    say(f"reading {len(excerpts)} score(s)")
+    for e, (notes, parts) in zip(excerpts, _read_all(excerpts, workers), strict=True):
         jobs += [{"excerpt": e.name, "notes": notes, "parts": parts, "method": m, "seed": s,
                   "db": db, "models": models, "search_config": search_config,
                   "needs_db": needs_db[m], "sample_rate": sample_rate,
@@ -323,4 +340,4 @@ def heldout_excerpts(path: str | os.PathLike | None = None, data_dir=None, *,
 
 __all__ = ["FIGURES", "METHODS", "Excerpt", "MethodOutput", "PartOutput", "check_methods",
            "compare", "evaluate_output", "heldout_excerpts", "render_method", "run_job",
-           "seed_list", "write_media"]
+           "read_excerpt", "seed_list", "write_media"]
