@@ -198,3 +198,29 @@ def test_why_counts_failing_notes_and_lists_the_worst_first():
     assert w["by_failure"] == {"slow attack": 2, "unsteady": 1, "class 5": 1}
     assert w["by_context"]["attack"] == 1 and w["by_context"]["string crossing"] == 1
     assert [n["measure"] for n in w["worst"]] == [3, 2]
+
+
+def _job(method, seed, excerpt, share, error=None):
+    hist = {"1": 0, "2": 0, "3": 9, "4": 1, "5": 0}
+    note = {**_note(share, 10, 30.0, 9, 0), "sustained_class_histogram": hist,
+            "failures": [], "contexts": ["attack"], "excerpt": excerpt, "seed": seed}
+    figures = ({"error": error} if error else
+               {"render_seconds": 1.0, "real_time_factor": 2.0, "audio_seconds": 2.0})
+    return {"excerpt": excerpt, "method": method, "seed": seed, "media": None,
+            "figures": figures, "notes": [] if error else [note] * 4}
+
+
+def test_an_excerpt_one_method_cannot_play_is_left_out_for_every_method():
+    from pipelines.reports.summary import summarise
+
+    done = [_job("a", s, e, 1.0) for s in (0, 1) for e in ("x", "y")]
+    done += [_job("b", s, "x", 0.5) for s in (0, 1)]
+    done += [_job("b", s, "y", 0.5, error="no bowed notes") for s in (0, 1)]
+    done += [_job("c", s, e, 0.5, error="no models") for s in (0, 1) for e in ("x", "y")]
+    r = summarise(done, excerpts=[{"name": "x"}, {"name": "y"}], methods=["a", "b", "c"],
+                  seeds=[0, 1])
+    assert r["failed"] == {"c": "no models"} and r["left_out"] == {"y": "b: no bowed notes"}
+    assert r["verdict"].startswith("On 1 excerpt x 2 seeds, a beats b on Helmholtz share")
+    assert r["verdict"].endswith("(y left out, b: no bowed notes; c not compared: no models).")
+    assert r["why"]["a"]["notes"] == 8  # only excerpt x's notes, 4 per seed
+    assert list(r["excerpts"]["y"]["summary"]) == ["a"]

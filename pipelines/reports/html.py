@@ -174,6 +174,8 @@ def _html(results: Mapping[str, Any], methods: Mapping[str, str], has_plot: bool
     out += _figure_table(results, results["timing"])
     for m, msg in results["failed"].items():
         out.append(f"<p><b>{esc(m)}</b> is not compared: {esc(msg)}</p>")
+    for e, msg in results.get("left_out", {}).items():
+        out.append(f"<p><b>{esc(e)}</b> is left out of these figures ({esc(msg)})</p>")
     if has_plot:
         out.append("<img src='intervals.png' alt='figures with 95 % intervals'>")
     out += ["<h2>Worst notes</h2>", *_worst(results["why"])]

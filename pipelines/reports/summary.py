@@ -12,7 +12,10 @@ into the content of ``results.json``:
 - ``excerpts``: the same per excerpt;
 - ``timing``: method -> mean render seconds and real-time factor (reported, not scored);
 - ``runs``: method -> excerpt -> seed -> the yardstick's figures (or ``error``);
-- ``failed``: method -> the first error (such a method is not compared);
+- ``failed``: method -> its first error, for a method that failed on every excerpt (it is
+  not compared); ``left_out``: excerpt -> which methods failed on it and why (such an
+  excerpt is left out of the pooled figures of every method, so that all are compared on
+  the same music; its own table holds the methods that played it);
 - ``setup``: excerpts, seeds, methods and how the intervals were computed;
 - ``media``: method -> excerpt -> audio and bowing plot of the first seed.
 """
@@ -112,43 +115,50 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
     >>> r["winners"]["helmholtz_share"], r["summary"]["b"]["helmholtz_share"]["mean"]
     ('a', 0.5)
     """
-    failed = {}
-    for r in done:
-        if "error" in r["figures"]:
-            failed.setdefault(r["method"], r["figures"]["error"])
-    ok = [m for m in methods if m not in failed]
-    good = [r for r in done if r["method"] in ok]
-    pooled = _intervals(good, ok, seeds)
     names = [e["name"] for e in excerpts]
+    errors = {(r["method"], r["excerpt"]): r["figures"]["error"] for r in done
+              if "error" in r["figures"]}
+    failed = {m: next(msg for (k, _), msg in errors.items() if k == m) for m in methods
+              if all((m, e) in errors for e in names)}
+    ok = [m for m in methods if m not in failed]
+    left_out = {e: "; ".join(f"{m}: {errors[(m, e)]}" for m in ok if (m, e) in errors)
+                for e in names if any((m, e) in errors for m in ok)}
+    good = [r for r in done if r["method"] in ok and r["excerpt"] not in left_out]
+    pooled = _intervals(good, ok, seeds)
     whys = {m: why([n for r in good if r["method"] == m for n in r["notes"]]) for m in ok}
+    per_excerpt = {}
+    for e in names:
+        played = [m for m in ok if (m, e) not in errors]
+        per_excerpt[e] = _table(_intervals([r for r in done if r["method"] in played],
+                                           played, seeds, e))
     runs: dict[str, dict[str, dict[str, Any]]] = {m: {} for m in methods}
     media: dict[str, dict[str, Any]] = {m: {} for m in methods}
     for r in done:
         runs[r["method"]].setdefault(r["excerpt"], {})[str(r["seed"])] = r["figures"]
         if r["media"]:
             media[r["method"]][r["excerpt"]] = r["media"]
-    verdict = verdict_sentence(pooled, n_excerpts=len(names), n_seeds=len(seeds))
-    if failed:
-        verdict = verdict[:-1] + f" ({_join_failed(failed)})."
+    verdict = verdict_sentence(pooled, n_excerpts=len(names) - len(left_out),
+                               n_seeds=len(seeds))
+    notes = [f"{e} left out, {msg}" for e, msg in left_out.items()]
+    notes += [f"{m} not compared: {msg}" for m, msg in failed.items()]
+    if notes:
+        verdict = verdict[:-1] + f" ({'; '.join(notes)})."
     return {
         "title": title or ", ".join(names),
         "verdict": verdict,
         "why": whys,
         "why_text": [why_sentence(m, w) for m, w in whys.items()],
         **_table(pooled),
-        "excerpts": {e: _table(_intervals(good, ok, seeds, e)) for e in names},
+        "excerpts": per_excerpt,
         "timing": _timing(done, methods),
         "runs": runs,
         "failed": failed,
+        "left_out": left_out,
         "setup": {"excerpts": list(excerpts), "seeds": seeds, "methods": methods,
                   "interval": INTERVAL_TEXT, "level": iv.LEVEL, "n_boot": iv.N_BOOT,
                   "bootstrap_seed": iv.BOOTSTRAP_SEED},
         "media": media,
     }
-
-
-def _join_failed(failed: dict[str, str]) -> str:
-    return "; ".join(f"{m} not compared: {msg}" for m, msg in failed.items())
 
 
 __all__ = ["INTERVAL_TEXT", "summarise"]
