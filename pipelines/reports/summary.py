@@ -75,6 +75,18 @@ def _timing(done: list[dict], methods: list[str]) -> dict[str, dict[str, float]]
     return out
 
 
+def _failures(done: list[dict], methods: list[str], names: list[str]):
+    """(method, excerpt) -> error; methods failing everywhere; excerpts left out."""
+    errors = {(r["method"], r["excerpt"]): r["figures"]["error"] for r in done
+              if "error" in r["figures"]}
+    failed = {m: next(msg for (k, _), msg in errors.items() if k == m) for m in methods
+              if all((m, e) in errors for e in names)}
+    ok = [m for m in methods if m not in failed]
+    left_out = {e: "; ".join(f"{m}: {errors[(m, e)]}" for m in ok if (m, e) in errors)
+                for e in names if any((m, e) in errors for m in ok)}
+    return errors, failed, left_out
+
+
 def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
               methods: list[str], seeds: list[int], title: str | None = None
               ) -> dict[str, Any]:
@@ -116,13 +128,8 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
     ('a', 0.5)
     """
     names = [e["name"] for e in excerpts]
-    errors = {(r["method"], r["excerpt"]): r["figures"]["error"] for r in done
-              if "error" in r["figures"]}
-    failed = {m: next(msg for (k, _), msg in errors.items() if k == m) for m in methods
-              if all((m, e) in errors for e in names)}
+    errors, failed, left_out = _failures(done, methods, names)
     ok = [m for m in methods if m not in failed]
-    left_out = {e: "; ".join(f"{m}: {errors[(m, e)]}" for m in ok if (m, e) in errors)
-                for e in names if any((m, e) in errors for m in ok)}
     good = [r for r in done if r["method"] in ok and r["excerpt"] not in left_out]
     pooled = _intervals(good, ok, seeds)
     whys = {m: why([n for r in good if r["method"] == m for n in r["notes"]]) for m in ok}
