@@ -17,3 +17,15 @@ def test_demo_writes_audio_plots_and_report(tmp_path):
     cents = [float(line.split("|")[3]) for line in report.splitlines()
              if line.startswith("| violin |")]
     assert len(cents) == 20 and max(abs(c) for c in cents) < 25
+
+
+def test_demo_says_when_the_held_out_protocol_cannot_run(tmp_path, monkeypatch, capsys):
+    import pipelines.reports.heldout as heldout
+    from pipelines.cli.commands.demo import heldout_story
+
+    monkeypatch.setenv("ARCO_SHARED_DATA", str(tmp_path / "none"))
+    monkeypatch.setattr(heldout, "__file__", str(tmp_path / "a" / "b" / "c" / "heldout.py"))
+    lines = heldout_story(tmp_path, workers=1)
+    assert lines[0] == "## The held-out protocol (quick run)"
+    assert any(line.startswith("Not run: shared data not found") for line in lines)
+    assert "held-out protocol skipped" in capsys.readouterr().out

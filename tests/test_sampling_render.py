@@ -186,15 +186,23 @@ def test_arco_compare_writes_the_report(tiny_db, tmp_path, capsys):
     out = tmp_path / "report"
     assert main(["compare", score, "--methods", "rules,sampling-open", "--db",
                  str(tiny_db / "db"), "-o", str(out), "--start-measure", "1",
-                 "--end-measure", "2", "--quiet"]) == 0
+                 "--end-measure", "2", "--seeds", "2", "--quiet"]) == 0
+    verdict = capsys.readouterr().out.strip()
     results = json.loads((out / "results.json").read_text())
-    assert set(results) == {"rules", "sampling-open"}
-    piece = results["sampling-open"]["mozart-k421"]
-    assert piece["notes"] > 0 and piece["render_seconds"] > 0 and "helmholtz_share" in piece
-    assert (out / "results.csv").read_text().count("\n") == 3
+    assert next(iter(results)) == "verdict" and results["verdict"] == verdict
+    assert verdict.startswith("On 1 excerpt x 2 seeds, ")
+    assert set(results["runs"]) == {"rules", "sampling-open"}
+    for seed in ("0", "1"):
+        piece = results["runs"]["sampling-open"]["mozart-k421"][seed]
+        assert piece["notes"] > 0 and piece["render_seconds"] > 0 and "helmholtz_share" in piece
+    iv = results["summary"]["rules"]["helmholtz_share"]
+    assert iv["low"] <= iv["high"] and 0.0 <= iv["low"] and iv["high"] <= 1.0
+    assert set(results["why"]) == {"rules", "sampling-open"}
+    assert (out / "results.csv").read_text().count("\n") == 5  # header + 2 methods x 2 seeds
     page = (out / "index.html").read_text()
-    assert "<audio" in page and "wins on" in page
+    assert "<audio" in page and verdict.split(",")[0] in page and "intervals.png" in page
     assert (out / "audio" / "mozart-k421-sampling-open.wav").exists()
+    assert (out / "intervals.png").stat().st_size > 10_000
 
 
 @pytest.mark.parametrize("args, message", [

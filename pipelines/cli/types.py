@@ -89,3 +89,23 @@ def add_limit_options(group, *, notes: bool) -> None:
         group.add_argument("--max-notes", type=positive_int, default=LIMITS.max_notes,
                            metavar="N", help="refuse scores with more notes than this "
                            f"(default: {LIMITS.max_notes})")
+
+
+def seeds(text: str) -> int | list[int]:
+    """``N`` (seeds 0..N-1, N >= 1) or a comma-separated list of distinct seeds >= 0.
+
+    Examples
+    --------
+    >>> seeds("5"), seeds("3,7")
+    (5, [3, 7])
+    >>> seeds("2,2")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: '2,2': seeds must be distinct
+    """
+    if "," not in text:
+        return _integer(text, 1)
+    out = [_integer(t.strip(), 0) for t in text.split(",") if t.strip()]
+    if len(set(out)) != len(out):
+        raise argparse.ArgumentTypeError(f"{text!r}: seeds must be distinct")
+    return out

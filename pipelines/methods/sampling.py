@@ -31,7 +31,7 @@ from data_schemas.instruments import finger_ratio, instrument_facts, limits
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
 from pipelines.methods.result import PartRender, RenderResult, mix
-from pipelines.perform.events import Event, Performance
+from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.rules import fermata_warp
 from pipelines.perform.timing import player_warp
 from pipelines.score.select import choose_parts
@@ -172,14 +172,6 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.Da
     return validate_targets(frame, source="sampling targets"), bowed
 
 
-def _events_table(events: list[Event]) -> pd.DataFrame:
-    return pd.DataFrame({
-        "t0": [e.t0 for e in events], "played_end": [e.played_end for e in events],
-        "end": [e.end for e in events], "label": [e.label for e in events],
-        "direction": [0 if e.pizz else e.direction for e in events],
-        "string": [e.strings[-1] for e in events], "dynamic": [e.dynamic for e in events]})
-
-
 def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
     """Plucks of pizzicato events and the lower strings of double stops (same bowing)."""
     frames = [actions]
@@ -273,7 +265,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     actions = _extra_rows(actions, events)
     warnings = [f"note group {g} is not in the database; sampled from {r}"
                 for g, r in sorted(result.fallbacks.items())]
-    return Performance(actions, _events_table(events), warnings), targets, result.choices
+    return Performance(actions, events_table(events, notes), warnings), targets, result.choices
 
 
 def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingDatabase,

@@ -62,7 +62,8 @@ class Performance:
         The actions table (see :data:`data_schemas.actions.ACTIONS`).
     events : pandas.DataFrame
         One row per played event: ``t0``, ``played_end``, ``end`` (s), ``label`` (note
-        names), ``direction`` (+1 down, -1 up, 0 pizz), ``string``, ``dynamic``.
+        names), ``direction`` (+1 down, -1 up, 0 pizz), ``string``, ``dynamic``,
+        ``measure``, ``n_strings``, ``run_position`` (:func:`events_table`).
     warnings : list of str
         Things the rules could not do as written (rolled chords, squeezed strokes).
     """
@@ -70,3 +71,39 @@ class Performance:
     actions: pd.DataFrame
     events: pd.DataFrame
     warnings: list[str]
+
+
+def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
+    """The events of a performance as a table (:attr:`Performance.events`).
+
+    Parameters
+    ----------
+    events : list of Event
+        The played events, in order.
+    notes : pandas.DataFrame
+        The part's notes the events' ``rows`` index (positionally).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``t0``, ``played_end``, ``end`` (s), ``label``, ``direction`` (+1 down, -1 up,
+        0 pizz), ``string`` (the top one), ``dynamic``, ``measure`` (of the event's first
+        note), ``n_strings`` (2 or more: a double stop or chord), ``run_position``.
+
+    Examples
+    --------
+    >>> e = Event(rows=[0], t0=0.0, end=0.5, strings=[2], semitones=[0.0], dynamic=5.0,
+    ...           label="A4", played_end=0.45)
+    >>> events_table([e], pd.DataFrame({"measure": [3]}))[["label", "measure", "n_strings"]]
+      label  measure  n_strings
+    0    A4        3          1
+    """
+    measure = notes["measure"].to_numpy()
+    return pd.DataFrame({
+        "t0": [e.t0 for e in events], "played_end": [e.played_end for e in events],
+        "end": [e.end for e in events], "label": [e.label for e in events],
+        "direction": [0 if e.pizz else e.direction for e in events],
+        "string": [e.strings[-1] for e in events], "dynamic": [e.dynamic for e in events],
+        "measure": [int(measure[e.rows[0]]) for e in events],
+        "n_strings": [len(e.strings) for e in events],
+        "run_position": [e.run_position for e in events]})

@@ -25,7 +25,7 @@ import pandas as pd
 
 from data_schemas.actions import ACTIONS, validate_actions
 from data_schemas.instruments import instrument_facts
-from pipelines.perform.events import Event, Performance
+from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.expression import assign_vibrato, intonation_cents
 from pipelines.perform.instruments import choose_strings, fit_range
 from pipelines.perform.loudness import even_out
@@ -379,10 +379,5 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
     # An accent on a cello C string can ask more than the actions table allows.
     limit = ACTIONS.column("bow_force").maximum
     actions["bow_force"] = actions["bow_force"].clip(upper=limit)
-    table = pd.DataFrame({
-        "t0": [e.t0 for e in events], "played_end": [e.played_end for e in events],
-        "end": [e.end for e in events], "label": [e.label for e in events],
-        "direction": [0 if e.pizz else e.direction for e in events],
-        "string": [e.strings[-1] for e in events], "dynamic": [e.dynamic for e in events],
-    })
+    table = events_table(events, notes)
     return Performance(validate_actions(actions, source=f"rules ({name})"), table, warnings)

@@ -1,13 +1,20 @@
-"""The comparison job: render every score with every method and measure each with the yardstick.
+"""The comparison job: every excerpt x method x seed rendered, measured and summarised.
 
-Methods: :data:`pipelines.methods.registry.METHODS`. Every render records the instrument's contact
-diagnostics, and :func:`pipelines.listening.evaluate.evaluate` judges each part; a score's figures
-are the yardstick's ``piece`` figures over the notes of all its rendered parts.
+Methods: :data:`pipelines.methods.registry.METHODS`. Every render records the instrument's
+contact diagnostics, and :func:`pipelines.listening.evaluate.evaluate` judges each part;
+each note is annotated with where it is (excerpt, seed, part, measure, pitch), its context
+and how it fails (:mod:`pipelines.reports.verdict`). Each method's figures over all
+excerpts and seeds get a mean and a 95 % interval (:mod:`pipelines.reports.intervals`), a
+winner where the intervals separate, and the report opens with the verdict
+(:mod:`pipelines.reports.html`). Renders run in parallel over methods x seeds
+(``workers``); the results do not depend on the order they finish in.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -20,116 +27,247 @@ from pipelines.methods.registry import (
     render_method,
 )
 from pipelines.reports.figures import FIGURES
+from pipelines.reports.summary import summarise
 
 
-def evaluate_output(output: MethodOutput, *, sample_rate: int,
-                    config: dict[str, Any]) -> dict[str, Any]:
-    """The yardstick's piece figures over all parts of a render, plus timings.
+@dataclass(frozen=True)
+class Excerpt:
+    """What to play of one score: its name in the report, file, measures and parts."""
+
+    name: str
+    path: str
+    start_measure: int | None = None
+    end_measure: int | None = None
+    part: str | None = None
+    all_parts: bool = False
+    movement: int | None = None
+
+
+def seed_list(seeds: int | Sequence[int]) -> list[int]:
+    """``N`` -> seeds 0..N-1; a list is kept (and must not repeat a seed).
+
+    Examples
+    --------
+    >>> seed_list(3), seed_list([4, 7])
+    ([0, 1, 2], [4, 7])
+    """
+    if isinstance(seeds, int):
+        if seeds < 1:
+            raise ParameterError(f"--seeds {seeds}: need at least one seed")
+        return list(range(seeds))
+    out = [int(s) for s in seeds]
+    if not out or len(set(out)) != len(out) or min(out) < 0:
+        raise ParameterError(f"--seeds {out}: need distinct non-negative seeds")
+    return out
+
+
+def evaluate_output(output: MethodOutput, *, sample_rate: int, config: dict[str, Any],
+                    excerpt: str = "", seed: int = 0) -> tuple[dict[str, Any], list[dict]]:
+    """The yardstick's piece figures over all parts of a render, and its annotated notes.
 
     The single integration point with :mod:`pipelines.listening.evaluate`: each part is
     evaluated with :func:`pipelines.listening.evaluate.evaluate` (contact diagnostics, the
     part's score for the dynamic lanes) and the notes of all parts are summarised by
-    :func:`pipelines.listening.evaluate.piece_figures`.
+    :func:`pipelines.listening.evaluate.piece_figures`. Each note gets ``excerpt``,
+    ``seed``, ``part``, ``instrument``, ``measure``, ``pitch``, ``contexts`` and
+    ``failures``.
     """
     from pipelines.listening.evaluate import evaluate, piece_figures
+    from pipelines.reports.intervals import figures_of, note_arrays
+    from pipelines.reports.verdict import matched_events, note_contexts, note_failures
 
     notes: list[dict[str, Any]] = []
     per_part = {}
     for p in output.parts:
         ev = evaluate(p.audio, p.actions, sample_rate=sample_rate, diagnostics=p.diagnostics,
                       instrument=p.instrument, score=p.notes, config=config)
+        events = p.events.sort_values("t0", kind="stable").reset_index(drop=True)
+        where = matched_events(ev["notes"], events)
+        for n, k, ctx in zip(ev["notes"], where, note_contexts(ev["notes"], events),
+                             strict=True):
+            row = events.iloc[k] if len(events) else None
+            n.update(excerpt=excerpt, seed=seed, part=p.part_name or f"part {p.part_index}",
+                     instrument=p.instrument, contexts=ctx, failures=note_failures(n),
+                     measure=int(row["measure"]) if row is not None and "measure" in row
+                     else -1, pitch=str(row["label"]) if row is not None else "")
         notes.extend(ev["notes"])
         per_part[str(p.part_index)] = {"part_name": p.part_name, "instrument": p.instrument,
                                        "measured_from": ev["measured_from"], **ev["piece"]}
     audio_seconds = output.audio.size / sample_rate
-    return {**piece_figures(notes), "render_seconds": round(output.render_seconds, 3),
-            "audio_seconds": round(audio_seconds, 3),
-            "real_time_factor": round(audio_seconds / max(output.render_seconds, 1e-9), 3),
-            "parts": per_part}
+    extra = figures_of(note_arrays(notes)) if notes else {}
+    figures = {**piece_figures(notes),
+               "sustained_class5_share": extra.get("sustained_class5_share", float("nan")),
+               "render_seconds": round(output.render_seconds, 3),
+               "audio_seconds": round(audio_seconds, 3),
+               "real_time_factor": round(audio_seconds / max(output.render_seconds, 1e-9), 3),
+               "parts": per_part}
+    return figures, notes
 
 
-def compare(scores: list[str | os.PathLike], out_dir: str | os.PathLike, *,
-            methods: list[str], db: str | os.PathLike | None = None,
-            models: str | os.PathLike | None = None, part: str | None = None,
-            all_parts: bool = False, start_measure: int | None = None,
-            end_measure: int | None = None, movement: int | None = None, seed: int = 0,
-            sample_rate: int = 44100,
+_CACHE: dict[tuple, Any] = {}
+
+
+def _database(db, search_config):
+    """The gesture database, opened once per process (None without a path)."""
+    if db is None:
+        return None
+    key = (str(db), str(search_config))
+    if key not in _CACHE:
+        from pipelines.methods.sampling import open_database
+
+        _CACHE[key] = open_database(db, search_config=search_config)
+    return _CACHE[key]
+
+
+def run_job(job: dict[str, Any]) -> dict[str, Any]:
+    """Render one excerpt with one method and seed, evaluate it, write its media if asked.
+
+    ``job`` holds ``excerpt`` (name), ``notes`` (the selected notes), ``parts``,
+    ``method``, ``seed``, ``db``, ``models``, ``search_config``, ``sample_rate`` and
+    ``media_dir`` (None: no media). Returns the job's key, its figures (or ``error``), the
+    annotated notes and the media paths.
+    """
+    from pipelines.perform.config import load_config
+
+    key = {k: job[k] for k in ("excerpt", "method", "seed")}
+    config = load_config()
+    try:
+        database = _database(job["db"], job["search_config"]) if job["needs_db"] else None
+        output = render_method(job["method"], job["notes"], job["parts"], stem=job["excerpt"],
+                               config=config, database=database, models=job["models"],
+                               seed=job["seed"], sample_rate=job["sample_rate"])
+        figures, notes = evaluate_output(output, sample_rate=job["sample_rate"], config=config,
+                                         excerpt=job["excerpt"], seed=job["seed"])
+    except ArcoError as exc:
+        return {**key, "figures": {"error": str(exc)}, "notes": [], "media": None}
+    media = None
+    if job["media_dir"] is not None:
+        media = write_media(output, Path(job["media_dir"]), job["excerpt"], job["method"],
+                            sample_rate=job["sample_rate"])
+    return {**key, "figures": figures, "notes": notes, "media": media}
+
+
+def read_excerpt(e: Excerpt) -> tuple[Any, list[int]]:
+    """The notes of an excerpt's measures (re-timed to 0) and the part indices to play."""
+    from pipelines.score import read_score
+    from pipelines.score.select import choose_parts, select_measures, select_movement
+
+    notes = select_measures(select_movement(read_score(e.path), e.movement), e.start_measure,
+                            e.end_measure)
+    return notes, choose_parts(notes, e.part, e.all_parts)
+
+
+def _read_all(excerpts: list[Excerpt], workers: int) -> list[tuple[Any, list[int]]]:
+    """Every excerpt read, on ``workers`` processes when there are several."""
+    if workers <= 1 or len(excerpts) <= 1:
+        return [read_excerpt(e) for e in excerpts]
+    from data_schemas.workers import process_pool
+
+    with process_pool(min(workers, len(excerpts)), context="spawn") as pool:
+        return list(pool.map(read_excerpt, excerpts))
+
+
+def _run_all(jobs: list[dict[str, Any]], workers: int, progress: bool) -> list[dict]:
+    """Every job, serially or on ``workers`` processes, with a progress bar."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(jobs), desc="compare", unit="render", disable=not progress)
+    done = []
+    if workers <= 1 or len(jobs) <= 1:
+        for job in jobs:
+            done.append(run_job(job))
+            bar.update()
+    else:
+        from concurrent.futures import as_completed
+
+        from data_schemas.workers import process_pool
+
+        with process_pool(min(workers, len(jobs)), context="spawn") as pool:
+            for future in as_completed([pool.submit(run_job, job) for job in jobs]):
+                done.append(future.result())
+                bar.update()
+    bar.close()
+    order = {(j["excerpt"], j["method"], j["seed"]): i for i, j in enumerate(jobs)}
+    return sorted(done, key=lambda r: order[(r["excerpt"], r["method"], r["seed"])])
+
+
+def compare(scores: Sequence[str | os.PathLike | Excerpt], out_dir: str | os.PathLike, *,
+            methods: list[str], seeds: int | Sequence[int] = 5,
+            db: str | os.PathLike | None = None, models: str | os.PathLike | None = None,
+            part: str | None = None, all_parts: bool = False,
+            start_measure: int | None = None, end_measure: int | None = None,
+            movement: int | None = None, sample_rate: int = 44100,
             search_config: str | os.PathLike | None = None,
-            log=None) -> dict[str, dict[str, dict[str, Any]]]:
-    """Render and evaluate every score with every method; write the report.
+            workers: int = 1, progress: bool = False, title: str | None = None,
+            log: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Render and evaluate every excerpt with every method and seed; write the report.
 
     Parameters
     ----------
-    scores : list of path-like
-        Score files (MusicXML, MXL, MIDI).
+    scores : list of path-like or Excerpt
+        Score files (MusicXML, MXL, MIDI; played with ``part``, ``all_parts``,
+        ``start_measure``, ``end_measure``) or :class:`Excerpt` records (their own).
     out_dir : path-like
-        Report directory: ``results.json``, ``results.csv``, ``index.html``, ``audio/``,
-        ``plots/``, ``actions/``.
+        Report directory: ``results.json``, ``results.csv``, ``index.html``,
+        ``intervals.png``, ``audio/``, ``plots/``, ``actions/`` (media of the first seed).
     methods : list of str
         From :data:`METHODS`.
+    seeds : int or list of int
+        ``N`` (seeds 0..N-1) or the seeds themselves.
     db, models : path-like, optional
         Gesture database and listening models (as the methods need them).
     part, all_parts, start_measure, end_measure, movement
-        Part, measure and movement selection, as ``arco render``.
-    seed : int
+        Part, measure and movement selection of the score files, as ``arco render``.
     sample_rate : int, Hz
     search_config : path-like, optional
         Sample-search settings merged over the shipped ones.
+    workers : int
+        Processes rendering methods x seeds in parallel (1: in this process).
+    progress : bool
+        Show a progress bar.
+    title : str, optional
+        What was compared (the report's heading), e.g. the protocol's name.
     log : callable, optional
         Called with progress lines.
 
     Returns
     -------
     dict
-        ``method -> score stem -> figures`` (the content of ``results.json``); a method that
-        failed on a score holds ``{"error": message}``.
+        The content of ``results.json`` (:func:`pipelines.reports.summary.summarise`).
     """
-    from pipelines.perform.config import load_config
     from pipelines.reports.html import write_report
-    from pipelines.score import read_score
-    from pipelines.score.select import choose_parts, select_measures, select_movement
 
     say = log or (lambda *_: None)
     check_methods(methods, db=db, models=models)
-    stems = [Path(s).stem for s in scores]
-    if len(set(stems)) != len(stems):
-        raise ParameterError(f"scores must have distinct file names, got {stems}")
-    database = _sampling_database(methods, db, search_config)
-    config = load_config()
-    out = Path(out_dir)
-    results: dict[str, dict[str, dict[str, Any]]] = {m: {} for m in methods}
-    media: dict[str, dict[str, dict[str, str]]] = {m: {} for m in methods}
-    for score, stem in zip(scores, stems, strict=True):
-        notes = select_measures(select_movement(read_score(score), movement), start_measure,
-                                end_measure)
-        parts = choose_parts(notes, part, all_parts)
-        for method in methods:
-            say(f"{stem}: {method} ...")
-            try:
-                output = render_method(method, notes, parts, stem=stem, config=config,
-                                       database=database, models=models, seed=seed,
-                                       sample_rate=sample_rate)
-                figures = evaluate_output(output, sample_rate=sample_rate, config=config)
-            except ArcoError as exc:
-                results[method][stem] = {"error": str(exc)}
-                say(f"{stem}: {method}: error: {exc}")
-                continue
-            results[method][stem] = figures
-            media[method][stem] = write_media(output, out, stem, method, sample_rate=sample_rate)
-            say(f"{stem}: {method}: {figures['render_seconds']:.1f} s, helmholtz share "
-                f"{figures['helmholtz_share']:.3f}")
-    write_report(results, out, media=media, methods=METHODS)
+    seeds = seed_list(seeds)
+    excerpts = [s if isinstance(s, Excerpt) else Excerpt(
+        Path(s).stem, str(s), start_measure, end_measure, part, all_parts, movement)
+        for s in scores]
+    names = [e.name for e in excerpts]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"scores must have distinct file names, got {names}")
+    needs_db = {m: m.startswith("sampling") for m in methods}
+    if any(needs_db.values()):
+        _database(db, search_config)  # a missing or bad database fails before any work
+    jobs = []
+    say(f"reading {len(excerpts)} score(s)")
+    for e, (notes, parts) in zip(excerpts, _read_all(excerpts, workers), strict=True):
+        jobs += [{"excerpt": e.name, "notes": notes, "parts": parts, "method": m, "seed": s,
+                  "db": db, "models": models, "search_config": search_config,
+                  "needs_db": needs_db[m], "sample_rate": sample_rate,
+                  "media_dir": str(out_dir) if s == seeds[0] else None}
+                 for m in methods for s in seeds]
+    say(f"{len(jobs)} renders: {len(excerpts)} excerpts x {len(methods)} methods x "
+        f"{len(seeds)} seeds")
+    done = _run_all(jobs, workers, progress)
+    for r in done:
+        if "error" in r["figures"]:
+            say(f"{r['excerpt']}: {r['method']} seed {r['seed']}: error: {r['figures']['error']}")
+    results = summarise(done, excerpts=[e.__dict__ for e in excerpts], methods=methods,
+                        seeds=seeds, title=title)
+    write_report(results, out_dir, methods=METHODS)
+    say(results["verdict"])
     return results
-
-
-def _sampling_database(methods: list[str], db: str | os.PathLike | None,
-                       search_config: str | os.PathLike | None):
-    """The gesture database opened once for the sampling methods (None without them)."""
-    if not any(m.startswith("sampling") for m in methods):
-        return None
-    from pipelines.methods.sampling import open_database
-
-    return open_database(db, search_config=search_config)
 
 
 def write_media(output: MethodOutput, out: Path, stem: str, method: str, *,
@@ -172,5 +310,38 @@ def write_media(output: MethodOutput, out: Path, stem: str, method: str, *,
     return {"audio": str(wav.relative_to(out)), "plot": str(png.relative_to(out))}
 
 
-__all__ = ["FIGURES", "METHODS", "MethodOutput", "PartOutput", "check_methods", "compare",
-           "evaluate_output", "render_method", "write_media"]
+def heldout_excerpts(path: str | os.PathLike | None = None, data_dir=None, *,
+                     first: int | None = None, measures: int | None = None):
+    """The held-out protocol and its excerpts (all parts) as :class:`Excerpt` records.
+
+    Parameters
+    ----------
+    path : path-like, optional
+        Protocol file (default: the shipped ``pipelines/data/heldout.toml``).
+    data_dir : path-like, optional
+        Shared data folder (default: :func:`pipelines.reports.heldout.shared_data_dir`).
+    first : int, optional
+        Only the protocol's first ``first`` excerpts (a quick run).
+    measures : int, optional
+        Only the first ``measures`` measures of each excerpt (a quick run).
+
+    Raises
+    ------
+    ParameterError, SchemaError
+        A bad protocol, or the shared data (or one of its files) is missing.
+    """
+    from pipelines.reports.heldout import load_protocol, resolve
+
+    protocol = load_protocol(path)
+    files = resolve(protocol, data_dir)
+    out = []
+    for e, f in list(zip(protocol.excerpts, files, strict=True))[:first]:
+        end = e.end_measure if measures is None else min(e.end_measure,
+                                                         e.start_measure + measures - 1)
+        out.append(Excerpt(e.id, str(f), e.start_measure, end, None, True))
+    return protocol, out
+
+
+__all__ = ["FIGURES", "METHODS", "Excerpt", "MethodOutput", "PartOutput", "check_methods",
+           "compare", "evaluate_output", "heldout_excerpts", "render_method", "run_job",
+           "read_excerpt", "seed_list", "write_media"]

@@ -1,9 +1,12 @@
-"""The comparison report: ``results.json``, ``results.csv`` and ``index.html``.
+"""The comparison report: ``results.json``, ``results.csv``, ``index.html``, ``intervals.png``.
 
-``results.json`` maps method -> score stem -> the yardstick's piece figures plus
-``render_seconds`` (and per-part figures under ``parts``). ``results.csv`` has one row per
-method x score with the scalar figures. ``index.html`` shows per score a table of the
-figures with the winning method of each figure marked, audio players and bowing plots.
+``results.json`` is :func:`pipelines.reports.summary.summarise`'s output (it opens with the
+verdict). ``results.csv`` has one row per method x excerpt x seed with the scalar figures.
+``index.html`` opens with the verdict sentence and the why, then per figure each method's
+mean and 95 % interval with the winner where the intervals separate ("no separation"
+otherwise), the plot of the intervals, the worst notes, and per excerpt the same table
+with audio players and bowing plots of the first seed. Render time is reported under the
+table and never scored or highlighted.
 """
 
 from __future__ import annotations
@@ -11,49 +14,32 @@ from __future__ import annotations
 import html
 import json
 import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 from data_schemas.io import atomic_path
-from pipelines.reports.figures import FIGURES
+from pipelines.reports.figures import FIGURES, LABELS, REPORTED
 
 
-def winners(results: dict[str, dict[str, dict[str, Any]]]) -> dict[str, dict[str, str]]:
-    """Best method per score stem and figure (ties: every tied method, joined by ``=``)."""
-    out: dict[str, dict[str, str]] = {}
-    stems = sorted({s for per in results.values() for s in per})
-    for stem in stems:
-        out[stem] = {}
-        for fig, larger in FIGURES.items():
-            vals = {}
-            for method, per in results.items():
-                v = per.get(stem, {}).get(fig)
-                if isinstance(v, int | float) and math.isfinite(v):
-                    vals[method] = abs(v) if larger is None else v
-            if len(vals) < 2:
-                continue
-            best = max(vals.values()) if larger else min(vals.values())
-            out[stem][fig] = "=".join(m for m, v in vals.items() if abs(v - best) <= 1e-12)
-    return out
-
-
-def results_frame(results: dict[str, dict[str, dict[str, Any]]]) -> pd.DataFrame:
-    """One row per method x score with the scalar figures (and ``error``)."""
+def results_frame(results: Mapping[str, Any]) -> pd.DataFrame:
+    """One row per method x excerpt x seed with the scalar figures (and ``error``)."""
     rows = []
-    for method, per in results.items():
-        for stem, figs in per.items():
-            row = {"method": method, "score": stem}
-            row.update({k: v for k, v in figs.items()
-                        if isinstance(v, int | float | str) and k != "parts"})
-            rows.append(row)
+    for method, per in results["runs"].items():
+        for excerpt, by_seed in per.items():
+            for seed, figs in by_seed.items():
+                row = {"method": method, "excerpt": excerpt, "seed": int(seed)}
+                row.update({k: v for k, v in figs.items()
+                            if isinstance(v, int | float | str) and k != "parts"})
+                rows.append(row)
     return pd.DataFrame(rows)
 
 
 def _json_safe(x):
     if isinstance(x, dict):
-        return {k: _json_safe(v) for k, v in x.items()}
+        return {str(k): _json_safe(v) for k, v in x.items()}
     if isinstance(x, list | tuple):
         return [_json_safe(v) for v in x]
     if isinstance(x, float) and not math.isfinite(x):
@@ -61,18 +47,15 @@ def _json_safe(x):
     return x
 
 
-def write_report(results: dict[str, dict[str, dict[str, Any]]], out_dir: str | Path, *,
-                 media: dict[str, dict[str, dict[str, str]]] | None = None,
-                 methods: dict[str, str] | None = None) -> dict[str, Path]:
-    """Write ``results.json``, ``results.csv`` and ``index.html`` into ``out_dir``.
+def write_report(results: Mapping[str, Any], out_dir: str | Path, *,
+                 methods: Mapping[str, str] | None = None) -> dict[str, Path]:
+    """Write ``results.json``, ``results.csv``, ``intervals.png`` and ``index.html``.
 
     Parameters
     ----------
     results : dict
-        method -> score stem -> figures.
+        :func:`pipelines.reports.summary.summarise`'s output.
     out_dir : path-like
-    media : dict, optional
-        method -> stem -> ``{"audio": relative path, "plot": relative path}``.
     methods : dict, optional
         Method name -> one-line description.
 
@@ -80,72 +63,134 @@ def write_report(results: dict[str, dict[str, dict[str, Any]]], out_dir: str | P
     -------
     dict of str to pathlib.Path
     """
+    from pipelines.reports.plots import plot_intervals
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"json": out / "results.json", "csv": out / "results.csv",
-             "html": out / "index.html"}
+             "html": out / "index.html", "plot": out / "intervals.png"}
+    ordered = {"verdict": results["verdict"], "why_text": results["why_text"],
+               **{k: v for k, v in results.items() if k not in ("verdict", "why_text")}}
     with atomic_path(paths["json"]) as tmp:
-        tmp.write_text(json.dumps(_json_safe(results), indent=1, sort_keys=True))
+        tmp.write_text(json.dumps(_json_safe(ordered), indent=1))
     with atomic_path(paths["csv"]) as tmp:
         results_frame(results).to_csv(tmp, index=False)
+    has_plot = bool(results["summary"])
+    if has_plot:
+        plot_intervals(results["summary"], paths["plot"], winners=results["winners"],
+                       title=results["verdict"])
     with atomic_path(paths["html"]) as tmp:
-        tmp.write_text(_html(results, media or {}, methods or {}))
+        tmp.write_text(_html(results, methods or {}, has_plot))
     return paths
 
 
-def _fmt(v) -> str:
-    if isinstance(v, float):
-        return "n/a" if not math.isfinite(v) else f"{v:.3g}"
-    return html.escape(str(v))
+def _num(v: float | None) -> str:
+    if v is None or not math.isfinite(v):
+        return "n/a"
+    return f"{v:.3g}" if abs(v) < 1000 else f"{v:.0f}"
 
 
-def _html(results, media, methods) -> str:
+def _cell(d: Mapping[str, float] | None) -> str:
+    if not d:
+        return "n/a"
+    return f"{_num(d['mean'])} <small>[{_num(d['low'])}, {_num(d['high'])}]</small>"
+
+
+def _figure_table(table: Mapping[str, Any], timing: Mapping[str, Any] | None) -> list[str]:
     esc = html.escape
-    win = winners(results)
-    figs = FIGURES
-    stems = sorted({s for per in results.values() for s in per})
+    methods = list(table["summary"])
+    out = ["<table><tr><th>figure</th>", *(f"<th>{esc(m)}</th>" for m in methods),
+           "<th>winner</th></tr>"]
+    for fig, larger in FIGURES.items():
+        way = {True: "larger", False: "smaller", None: "closer to 0"}[larger]
+        out.append(f"<tr><th>{esc(LABELS[fig])} <small>({way} is better)</small></th>")
+        win = table["winners"].get(fig)
+        for m in methods:
+            cls = " class='win'" if m == win else ""
+            out.append(f"<td{cls}>{_cell(table['summary'][m].get(fig))}</td>")
+        who = table["contenders"].get(fig) or []
+        text = win if win else ("no separation" + (f" ({', '.join(who)})" if who else ""))
+        out.append(f"<td>{esc(text)}</td></tr>")
+    if timing:
+        for key in REPORTED:
+            out.append(f"<tr class='time'><th>{esc(LABELS[key])}</th>")
+            out += [f"<td>{_num(timing.get(m, {}).get(key))}</td>" for m in methods]
+            out.append("<td></td></tr>")
+    out.append("</table>")
+    return out
+
+
+def _worst(why: Mapping[str, Any]) -> list[str]:
+    esc = html.escape
+    out = ["<table><tr><th>method</th><th>excerpt</th><th>seed</th><th>part</th>"
+           "<th>measure</th><th>pitch</th><th>how it fails</th><th>context</th>"
+           "<th>Helmholtz share</th><th>attack (ms)</th></tr>"]
+    for m, w in why.items():
+        for n in w["worst"]:
+            out.append(
+                f"<tr><td>{esc(m)}</td><td>{esc(n['excerpt'])}</td><td>{n['seed']}</td>"
+                f"<td>{esc(n['part'])}</td><td>{n['measure']}</td><td>{esc(n['pitch'])}</td>"
+                f"<td>{esc(', '.join(n['failures']))}</td>"
+                f"<td>{esc(', '.join(n['contexts']))}</td>"
+                f"<td>{_num(n['helmholtz_share'])}</td><td>{_num(n['attack_ms'])}</td></tr>")
+    out.append("</table>")
+    return out
+
+
+def _counts(why: Mapping[str, Any]) -> list[str]:
+    esc = html.escape
+    if not why:
+        return []
+    first = next(iter(why.values()))
+    cols = [*first["by_failure"], *first["by_context"]]
+    out = ["<table><tr><th>method</th><th>notes</th><th>failing</th>",
+           *(f"<th>{esc(c)}</th>" for c in cols), "</tr>"]
+    for m, w in why.items():
+        vals = {**w["by_failure"], **w["by_context"]}
+        out.append(f"<tr><td>{esc(m)}</td><td>{w['notes']}</td><td>{w['failing']}</td>"
+                   + "".join(f"<td>{vals[c]}</td>" for c in cols) + "</tr>")
+    out.append("</table>")
+    return out
+
+
+def _html(results: Mapping[str, Any], methods: Mapping[str, str], has_plot: bool) -> str:
+    esc = html.escape
     out = ["<!doctype html><html><head><meta charset='utf-8'><title>Arco comparison</title>",
-           "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
+           "<style>body{font-family:sans-serif;margin:2em;max-width:80em}"
+           "table{border-collapse:collapse;margin:1em 0}"
            "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
-           ".win{background:#c8f0c8;font-weight:bold}img{max-width:100%}</style></head><body>",
-           "<h1>Arco: rendering methods compared</h1><ul>"]
-    for m in results:
-        out.append(f"<li><b>{esc(m)}</b>: {esc(methods.get(m, ''))}</li>")
-    out.append("</ul><p>Figures from the yardstick (<code>arco evaluate</code>) over all "
-               "rendered notes; larger is better for shares, smaller for attack times and "
-               "render time, closer to zero for pitch and level errors. The best value of "
-               "each figure is highlighted.</p>")
-    for stem in stems:
-        out.append(f"<h2>{esc(stem)}</h2><table><tr><th>figure</th>")
-        out += [f"<th>{esc(m)}</th>" for m in results]
-        out.append("<th>wins</th></tr>")
-        for fig in figs:
-            out.append(f"<tr><th>{esc(fig)}</th>")
-            best = set(win.get(stem, {}).get(fig, "").split("="))
-            for m in results:
-                v = results[m].get(stem, {}).get(fig, results[m].get(stem, {}).get("error", ""))
-                cls = " class='win'" if m in best else ""
-                out.append(f"<td{cls}>{_fmt(v)}</td>")
-            out.append(f"<td>{esc(win.get(stem, {}).get(fig, ''))}</td></tr>")
-        out.append("</table>")
-        summary = {}
-        for fig, who in win.get(stem, {}).items():
-            for m in who.split("="):
-                summary.setdefault(m, []).append(fig)
-        out.append("<p>" + "; ".join(f"<b>{esc(m)}</b> wins on {esc(', '.join(f))}"
-                                     for m, f in summary.items()) + "</p>")
-        for m in results:
-            entry = media.get(m, {}).get(stem)
-            if "error" in results[m].get(stem, {}):
-                out.append(f"<h3>{esc(m)}</h3><p>error: {esc(results[m][stem]['error'])}</p>")
-                continue
-            if not entry:
-                continue
-            out.append(f"<h3>{esc(m)}</h3><audio controls preload='none' "
-                       f"src='{esc(entry['audio'])}'></audio><br>"
-                       f"<img src='{esc(entry['plot'])}' alt='bowing, {esc(m)}'>")
+           ".win{background:#c8f0c8;font-weight:bold}.time td,.time th{color:#666}"
+           ".verdict{font-size:1.25em;font-weight:bold}img{max-width:100%}</style></head><body>",
+           f"<h1>Arco: rendering methods compared</h1><p>{esc(results['title'])}</p>",
+           f"<p class='verdict'>{esc(results['verdict'])}</p>", "<h2>Why</h2><ul>",
+           *(f"<li>{esc(line)}</li>" for line in results["why_text"]), "</ul>"]
+    out += _counts(results["why"])
+    out += ["<ul>", *(f"<li><b>{esc(m)}</b>: {esc(methods.get(m, ''))}</li>"
+                      for m in results["setup"]["methods"]), "</ul>"]
+    out.append(f"<h2>All excerpts and seeds</h2><p>Seeds {results['setup']['seeds']}; "
+               f"{esc(results['setup']['interval'])}. A winner is named only where its "
+               "interval separates from every other method's; render time is reported, not "
+               "scored.</p>")
+    out += _figure_table(results, results["timing"])
+    for m, msg in results["failed"].items():
+        out.append(f"<p><b>{esc(m)}</b> is not compared: {esc(msg)}</p>")
+    for e, msg in results.get("left_out", {}).items():
+        out.append(f"<p><b>{esc(e)}</b> is left out of these figures ({esc(msg)})</p>")
+    if has_plot:
+        out.append("<img src='intervals.png' alt='figures with 95 % intervals'>")
+    out += ["<h2>Worst notes</h2>", *_worst(results["why"])]
+    for name, table in results["excerpts"].items():
+        out.append(f"<h2>{esc(name)}</h2>")
+        if table["summary"]:
+            out += _figure_table(table, None)
+        for m in results["setup"]["methods"]:
+            entry = results["media"].get(m, {}).get(name)
+            if entry:
+                out.append(f"<h3>{esc(m)}</h3><audio controls preload='none' "
+                           f"src='{esc(entry['audio'])}'></audio><br>"
+                           f"<img src='{esc(entry['plot'])}' alt='bowing, {esc(m)}'>")
     out.append("</body></html>")
     return "\n".join(out)
 
 
-__all__ = ["results_frame", "winners", "write_report"]
+__all__ = ["results_frame", "write_report"]

@@ -94,3 +94,64 @@ def plot_bowing(actions: pd.DataFrame, events: pd.DataFrame, path: str | os.Path
         fig.savefig(tmp, dpi=110, format="png")
     plt.close(fig)
     return path
+
+
+def plot_intervals(summary: dict[str, dict[str, dict[str, float]]], path: str | os.PathLike, *,
+                   winners: dict[str, str | None] | None = None, title: str = "") -> Path:
+    """Write one PNG: each scored figure's mean and 95 % interval per method (error bars).
+
+    Parameters
+    ----------
+    summary : dict
+        method -> figure -> ``{"mean", "low", "high"}`` (missing or NaN: not drawn).
+    path : path-like
+        Output ``.png``.
+    winners : dict, optional
+        figure -> the winning method (drawn green) or None.
+    title : str
+        Figure title (wrapped).
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+    """
+    import textwrap
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pipelines.reports.figures import FIGURES, LABELS
+
+    methods = list(summary)
+    figs = list(FIGURES)
+    cols = 4
+    rows = -(-len(figs) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 2.8 * rows + 0.8), squeeze=False)
+    for ax, name in zip(axes.flat, figs, strict=False):
+        for k, m in enumerate(methods):
+            d = summary[m].get(name)
+            if not d or not all(isinstance(d[x], float) and np.isfinite(d[x])
+                                for x in ("mean", "low", "high")):
+                continue
+            colour = "#2ca02c" if winners and winners.get(name) == m else "#1f77b4"
+            ax.errorbar([k], [d["mean"]], yerr=[[d["mean"] - d["low"]], [d["high"] - d["mean"]]],
+                        fmt="o", color=colour, capsize=4)
+        way = {True: "higher better", False: "lower better", None: "closer to 0"}[FIGURES[name]]
+        ax.set_title(f"{LABELS[name]}\n({way})", fontsize=8)
+        ax.set_xticks(range(len(methods)), methods, rotation=30, fontsize=7, ha="right")
+        ax.set_xlim(-0.5, len(methods) - 0.5)
+        ax.tick_params(axis="y", labelsize=7)
+        ax.grid(alpha=0.3)
+    for ax in list(axes.flat)[len(figs):]:
+        ax.axis("off")
+    if title:
+        fig.suptitle("\n".join(textwrap.wrap(title, 150)), fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100, format="png")
+    plt.close(fig)
+    return path

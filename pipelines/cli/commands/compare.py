@@ -1,4 +1,8 @@
-"""``arco compare SCORES... --methods rules,feedback,sampling,sampling-open -o report/``."""
+"""``arco compare SCORES... --methods rules,feedback,sampling,sampling-open -o report/``.
+
+``arco compare --heldout [PROTOCOL.toml]`` plays the held-out protocol's excerpts (all four
+parts) from the shared data folder instead of given scores.
+"""
 
 from __future__ import annotations
 
@@ -6,19 +10,31 @@ import argparse
 import sys
 
 from pipelines.cli.outputs import output_dir, removed_on_failure
-from pipelines.cli.types import MOVEMENT_HELP, non_negative_int, positive_int
+from pipelines.cli.types import MOVEMENT_HELP, positive_int, seeds
 
 DEFAULT_METHODS = "rules,feedback,sampling,sampling-open"
+#: ``--heldout`` without a path: the shipped protocol.
+SHIPPED = "shipped"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``compare`` sub-command."""
     p = subparsers.add_parser(
         "compare", help="render scores with every method and compare them",
-        description="Render every SCORE with every method, evaluate each render with the "
-                    "yardstick and write results.json, results.csv and index.html (tables, "
-                    "audio players, bowing plots) to the output directory.")
-    p.add_argument("scores", nargs="+", metavar="SCORE", help=".musicxml, .mxl or .mid files")
+        description="Render every SCORE (or the held-out protocol's excerpts) with every "
+                    "method and several seeds, evaluate each render with the yardstick and "
+                    "write results.json, results.csv, intervals.png and index.html (the "
+                    "verdict, why notes fail, each figure's mean and 95 %% interval, the "
+                    "winner where intervals separate, audio players, bowing plots).")
+    p.add_argument("scores", nargs="*", metavar="SCORE", help=".musicxml, .mxl or .mid files")
+    p.add_argument("--heldout", nargs="?", const=SHIPPED, metavar="PROTOCOL.toml",
+                   help="play the held-out protocol's excerpts (default: the shipped "
+                        "pipelines/data/heldout.toml) from $ARCO_SHARED_DATA or "
+                        "../shared/data")
+    p.add_argument("--excerpts", type=positive_int, metavar="N",
+                   help="with --heldout: only the protocol's first N excerpts (a quick run)")
+    p.add_argument("--measures", type=positive_int, metavar="M",
+                   help="with --heldout: only the first M measures of each excerpt")
     p.add_argument("--methods", default=DEFAULT_METHODS,
                    help="comma-separated methods (arco render --help lists them)")
     p.add_argument("--db", metavar="DB", help="gesture database (sampling methods)")
@@ -26,13 +42,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--search-config", metavar="SEARCH.toml",
                    help="sample-search weights merged over the shipped defaults")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="report directory")
-    which = p.add_argument_group("parts")
+    which = p.add_argument_group("parts (given scores)")
     which.add_argument("--part", metavar="NAME|INDEX", help="part to play (default: first)")
     which.add_argument("--all-parts", action="store_true", help="play every part and mix")
     which.add_argument("--movement", type=positive_int, metavar="N", help=MOVEMENT_HELP)
     which.add_argument("--start-measure", type=int, metavar="M", help="first measure")
     which.add_argument("--end-measure", type=int, metavar="M", help="last measure")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    p.add_argument("--seeds", type=seeds, default=None, metavar="N|S,S,...",
+                   help="N seeds (0..N-1) or a list (default: 5, or the protocol's)")
+    p.add_argument("--workers", type=positive_int, default=1,
+                   help="processes rendering methods x seeds in parallel")
     p.add_argument("--sample-rate", type=int, default=44100, metavar="HZ",
                    help="audio sample rate in Hz")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -40,16 +59,36 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Compare and print where the report is."""
-    from pipelines.reports.compare import compare
+    """Compare and print the verdict and where the report is."""
+    from data_schemas.errors import ParameterError
+    from pipelines.reports.compare import compare, heldout_excerpts
 
     output_dir(args.output)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    n_seeds = args.seeds
+    title = None
+    if args.heldout is not None:
+        if args.scores:
+            raise ParameterError("give either SCORE files or --heldout, not both")
+        protocol, scores = heldout_excerpts(None if args.heldout == SHIPPED else args.heldout,
+                                            first=args.excerpts, measures=args.measures)
+        n_seeds = protocol.seeds if n_seeds is None else n_seeds
+        title = f"held-out protocol {protocol.name!r} ({protocol.source})"
+    elif args.excerpts is not None or args.measures is not None:
+        raise ParameterError("--excerpts and --measures apply to --heldout")
+    elif not args.scores:
+        raise ParameterError("give SCORE files or --heldout [PROTOCOL.toml]")
+    else:
+        scores = args.scores
     with removed_on_failure(args.output):  # a failed comparison leaves no partial report
-        compare(args.scores, args.output, methods=methods, db=args.db, models=args.models,
-                part=args.part, all_parts=args.all_parts, start_measure=args.start_measure,
-                end_measure=args.end_measure, movement=args.movement, seed=args.seed,
-                sample_rate=args.sample_rate, search_config=args.search_config, log=say)
+        results = compare(scores, args.output, methods=methods,
+                          seeds=5 if n_seeds is None else n_seeds, db=args.db,
+                          models=args.models, part=args.part, all_parts=args.all_parts,
+                          start_measure=args.start_measure, end_measure=args.end_measure,
+                          movement=args.movement, sample_rate=args.sample_rate,
+                          search_config=args.search_config, workers=args.workers,
+                          progress=not args.quiet, title=title, log=say)
+    print(results["verdict"])
     say(f"wrote {args.output}/index.html, results.json, results.csv")
     return 0

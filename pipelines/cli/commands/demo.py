@@ -7,7 +7,13 @@
 3. gesture sampling against feedback control: simulate a small set of bowing recordings,
    build the gesture database, train the listening models (reused when ``out/models``
    already holds them), and compare rules, feedback, sampling and open-loop sampling on
-   the first violin's opening (``report/index.html``, ``report/results.json``).
+   the first violin's opening with two seeds (``report/index.html``,
+   ``report/results.json``);
+4. a quick run of the held-out protocol (``pipelines/data/heldout.toml``: its first two
+   excerpts, four measures each, all four parts, two seeds) when the shared data folder is
+   there (``$ARCO_SHARED_DATA`` or ``../shared/data``; the report says when it is not):
+   ``heldout/index.html``. Methods that listen need models of every instrument the
+   quartet plays; without viola and cello models only the open-loop methods run.
 
 ``report.md`` says what was played and what was measured. Each step of part 3 is an
 ``arco`` command, printed as it runs, so it can be repeated on one's own data.
@@ -35,6 +41,10 @@ PITCH_TOLERANCE_CENTS = 10.0
 DEMO_MEASURES = (1, 8)
 #: Size of the simulated recording set of the demo (notes, performers).
 DEMO_RECORDINGS = (2000, 3)
+#: Seeds of the demo's comparisons.
+DEMO_SEEDS = 2
+#: The quick held-out run: the protocol's first excerpts, measures of each.
+HELDOUT_QUICK = (2, 4)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -60,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     report += quartet_rules(out, args.seed)
     if not args.skip_learning:
         report += sampling_story(out, args.seed, args.workers)
+        report += heldout_story(out, args.workers)
     (out / "report.md").write_text("\n".join(report) + "\n")
     print(f"wrote audio, plots and {out / 'report.md'}")
     return 0
@@ -145,7 +156,8 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
         ["compare", str(bundled_score()), "--methods", "rules,feedback,sampling,sampling-open",
          "--db", str(out / "db"), "--models", str(out / "models"), "--part", "0",
          "--start-measure", str(DEMO_MEASURES[0]), "--end-measure", str(DEMO_MEASURES[1]),
-         "--seed", str(seed), "-o", str(out / "report")],
+         "--seeds", str(DEMO_SEEDS), "--workers", str(workers), "--quiet",
+         "-o", str(out / "report")],
     ]
     timings = []
     for step in steps:
@@ -159,23 +171,72 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
     lines = ["## Gesture sampling against feedback control", "",
              f"{notes} simulated notes by {performers} performers -> gesture database -> "
              "listening models for the 16 violin string x dynamic pairs -> the first violin of "
-             f"K. 421, measures {DEMO_MEASURES[0]}-{DEMO_MEASURES[1]}, played four ways. "
-             "Full report with audio and bowing plots: `report/index.html`.", "",
-             "| method | Helmholtz share | class-3 share | attack median (ms) | "
-             "pitch error (cents) | render (s) |", "|---|---|---|---|---|---|"]
-    stem = bundled_score().stem
-    for method, pieces in results.items():
-        figures = pieces.get(stem, {})
-        if "error" in figures:
-            lines.append(f"| {method} | error: {figures['error']} | | | | |")
-            continue
-        lines.append(
-            f"| {method} | {figures['helmholtz_share']:.3f} | "
-            f"{figures.get('sustained_class3_share', float('nan')):.3f} | "
-            f"{figures['attack_ms_median']:.0f} | {figures['pitch_error_cents_median']:+.1f} | "
-            f"{figures['render_seconds']:.1f} |")
-    lines += ["", "Steps: " + ", ".join(f"{name} {sec:.0f} s" for name, sec in timings), ""]
+             f"K. 421, measures {DEMO_MEASURES[0]}-{DEMO_MEASURES[1]}, played four ways with "
+             f"{DEMO_SEEDS} seeds. Full report with audio and bowing plots: "
+             "`report/index.html`.", "", f"**{results['verdict']}**", "",
+             *interval_table(results), "",
+             "Steps: " + ", ".join(f"{name} {sec:.0f} s" for name, sec in timings), ""]
     return lines
+
+
+def interval_table(results: dict) -> list[str]:
+    """Markdown table of a comparison's headline figures: mean [95 % interval]."""
+    cols = (("helmholtz_share", "Helmholtz share", 3), ("attack_ms_p90", "attack p90 (ms)", 0),
+            ("sustained_class3_share", "class-3 share", 3),
+            ("sustained_class5_share", "class-5 share", 3))
+    lines = ["| method | " + " | ".join(c[1] for c in cols) + " | render (s, not scored) |",
+             "|---" * (len(cols) + 2) + "|"]
+    for method, figs in results["summary"].items():
+        cells = []
+        for key, _, digits in cols:
+            d = figs.get(key)
+            cells.append("n/a" if not d or d["mean"] is None else
+                         f"{d['mean']:.{digits}f} [{d['low']:.{digits}f}, {d['high']:.{digits}f}]")
+        seconds = results["timing"].get(method, {}).get("render_seconds")
+        lines.append(f"| {method} | " + " | ".join(cells)
+                     + f" | {'' if seconds is None else format(seconds, '.1f')} |")
+    for method, message in results["failed"].items():
+        lines.append(f"| {method} | not compared: {message} |" + " |" * len(cols))
+    return lines
+
+
+def heldout_story(out: Path, workers: int) -> list[str]:
+    """The quick held-out run, or a line saying why it did not run."""
+    import json
+
+    from data_schemas.errors import ParameterError
+    from pipelines.cli.main import main
+    from pipelines.reports.heldout import shared_data_dir
+    from synth.listening.classifier import DYNAMICS, pair_key
+
+    head = ["## The held-out protocol (quick run)", ""]
+    try:
+        shared_data_dir()
+    except ParameterError as exc:
+        print(f"held-out protocol skipped: {exc}")
+        return [*head, f"Not run: {exc}.", ""]
+    models = out / "models"
+    listening = all((models / f"{pair_key(i, 0, DYNAMICS[0])}.json").exists()
+                    for i in ("violin", "viola", "cello"))
+    methods = "rules,feedback,sampling,sampling-open" if listening else "rules,sampling-open"
+    first, measures = HELDOUT_QUICK
+    step = ["compare", "--heldout", "--excerpts", str(first), "--measures", str(measures),
+            "--seeds", str(DEMO_SEEDS), "--methods", methods, "--db", str(out / "db"),
+            "--models", str(models), "--workers", str(workers), "--quiet",
+            "-o", str(out / "heldout")]
+    print("$ arco " + " ".join(step), flush=True)
+    start = time.perf_counter()
+    if main(step) != 0:
+        raise RuntimeError(f"demo step failed: arco {' '.join(step)}")
+    results = json.loads((out / "heldout" / "results.json").read_text())
+    note = "" if listening else (" Feedback and sampling with the loop need viola and cello "
+                                 "models too (`arco train --instrument viola|cello`); only "
+                                 "the open-loop methods ran.")
+    return [*head, f"The first {first} excerpts of `pipelines/data/heldout.toml`, "
+            f"{measures} measures each, all four parts, {DEMO_SEEDS} seeds "
+            f"({time.perf_counter() - start:.0f} s): `heldout/index.html`.{note} The full "
+            "protocol: `arco compare --heldout --db DB --models DIR -o DIR`.", "",
+            f"**{results['verdict']}**", "", *interval_table(results), ""]
 
 
 def _pitch_rows(name: str, audio: np.ndarray, events) -> list[str]:
