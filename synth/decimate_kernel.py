@@ -137,7 +137,8 @@ def check_polyphase_branches(factor: int, phases: np.ndarray, shifts: np.ndarray
     if starts[0] != 0 or starts[-1] != taps.size or (lengths < 0).any():
         raise ParameterError(f"starts must rise from 0 to the {taps.size} taps, "
                              f"got {starts.tolist()}")
-    return int((shifts + lengths).max()) - 1 if phases.size else 0
+    used = lengths > 0  # an empty branch reads no frames
+    return int((shifts + lengths)[used].max()) - 1 if used.any() else 0
 
 
 def polyphase_decimate(extended: np.ndarray, factor: int, phases: np.ndarray,
