@@ -54,13 +54,14 @@ def _start(argv: list[str], tmp_path: Path) -> subprocess.Popen:
                             start_new_session=True)
 
 
-def _workers_of(proc: subprocess.Popen, want: int, timeout: float = 90.0) -> set[int]:
+def _workers_of(proc: subprocess.Popen, want: int, timeout: float = 90.0,
+                settle: float = 1.0) -> set[int]:
     deadline = time.monotonic() + timeout
     seen: set[int] = set()
     while time.monotonic() < deadline and proc.poll() is None:
         seen |= _children(proc.pid)
         if len(seen) >= want:
-            time.sleep(1.0)  # let the workers start their jobs
+            time.sleep(settle)  # let the workers start their jobs
             return seen | _children(proc.pid)
         time.sleep(0.1)
     proc.kill()
@@ -82,7 +83,7 @@ def takes(tmp_path_factory):
     from gesture_db.simulate import simulate_recordings
 
     rec = tmp_path_factory.mktemp("rec") / "rec"
-    simulate_recordings(1200, 1, rec, seed=3, notes_per_take=150)
+    simulate_recordings(3000, 1, rec, seed=3, notes_per_take=150)  # 20 takes: seconds of work
     return rec
 
 
@@ -107,7 +108,8 @@ def test_kill_9_leaves_no_workers(takes, tmp_path, command):
 
 def test_ctrl_c_stops_the_workers(takes, tmp_path):
     proc = _build_db(takes, tmp_path)
-    workers = _workers_of(proc, 2)
+    workers = _workers_of(proc, 2, settle=0.2)
+    assert proc.poll() is None, "the build ended before it could be interrupted"
     os.killpg(proc.pid, signal.SIGINT)  # what the terminal sends on Ctrl-C
     code = proc.wait(timeout=30)
     err = proc.stderr.read().decode()
