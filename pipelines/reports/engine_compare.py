@@ -54,10 +54,10 @@ def check_engines(engines: Sequence[str], audio_db: object | None) -> list[str]:
     --------
     >>> check_engines(["modal"], None)
     ['modal']
-    >>> check_engines(["modal", "cws"], None)
+    >>> check_engines(["modal", "cws"], None)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    data_schemas.errors.ParameterError: --engines cws needs --audio-db ADB (arco build-db --audio DIR -o ADB)
+    data_schemas.errors.ParameterError: --engines cws needs --audio-db ADB ...
     """
     from synth.engines import engine_names
 
@@ -115,8 +115,10 @@ def source_figures(audio: np.ndarray, table, real_mfcc: np.ndarray | None,
 
 def play_engine(name: str, actions, db: Any, recording: str, seed: int,
                 workdir: Path) -> tuple[np.ndarray, dict[str, Any]]:
-    """One engine's render of the actions (database engines: ``db`` without ``recording``,
-    its caches in ``workdir``)."""
+    """One engine's render of the actions and its real-time factor.
+
+    Database engines play ``db`` without ``recording`` (its caches in ``workdir``).
+    """
     from synth.engines import get_engine
     from synth.render import render_actions
 
@@ -192,8 +194,11 @@ def performer(name: str) -> str:
 
 
 def set_floor(per: dict[str, dict], mfcc: dict[str, np.ndarray]) -> float | None:
-    """Each real recording's ``mfcc_frechet``: its mean distance to other performers'
-    recordings (all recordings when there is one performer); returns the overall mean."""
+    """Set each real recording's ``mfcc_frechet``; return the overall mean.
+
+    A recording's floor is its mean distance to other performers' recordings (to all other
+    recordings when there is one performer).
+    """
     names = sorted(mfcc)
     across = []
     for a in names:
@@ -225,7 +230,9 @@ def verdict(means: dict[str, dict[str, float | None]]) -> str:
     --------
     >>> verdict({"real": {"mfcc_frechet": 900.0}, "modal": {"mfcc_frechet": 1100.0},
     ...          "frames": {"mfcc_frechet": 600.0}, "fluidr3": {"mfcc_frechet": None}})
-    'closest to the real recordings by MFCC Frechet: frames (mean 600), then modal (1100); fluidr3 not measured'
+    ... # doctest: +NORMALIZE_WHITESPACE
+    'closest to the real recordings by MFCC Frechet: frames (mean 600), then modal (1100);
+     fluidr3 not measured'
     """
     got = sorted(((v["mfcc_frechet"], s) for s, v in means.items()
                   if s != "real" and v.get("mfcc_frechet") is not None))
@@ -244,8 +251,10 @@ def compare_engines(engines: Sequence[str], recordings_dir: str | Path, out_dir:
                     audio_db: str | Path | None = None, seconds: float = 30.0, seed: int = 0,
                     keep_audio: bool = True, progress: bool = True,
                     log: Callable[..., None] = lambda *a: None) -> dict[str, Any]:
-    """Run the comparison and write ``results.json``, ``index.html`` and one bar chart per
-    figure into ``out_dir``; returns the results (``verdict`` included).
+    """Run the comparison and write its report into ``out_dir``.
+
+    The report: ``results.json``, ``index.html``, WAVs of every source and one bar chart
+    per figure. Returns the results (``verdict`` included).
 
     Raises
     ------

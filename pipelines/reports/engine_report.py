@@ -1,5 +1,8 @@
-"""The report of ``arco compare --engines``: ``results.json``, ``index.html`` and one bar
-chart per figure (sources x recordings, ``bars-FIGURE.png``), each written atomically."""
+"""The report of ``arco compare --engines``.
+
+``results.json``, ``index.html`` and one bar chart per figure (sources x recordings,
+``bars-FIGURE.png``), each written atomically.
+"""
 
 from __future__ import annotations
 

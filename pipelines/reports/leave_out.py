@@ -87,8 +87,9 @@ def without(db: Any, recording: str, root: str | os.PathLike | None = None) -> A
 
 
 def shared_recordings_folder(repo: str | os.PathLike) -> Path:
-    """The shared bach-violin folder: ``$ARCO_SHARED_DATA/bach-violin``, else
-    ``../shared/data/bach-violin`` next to ``repo``.
+    """The shared bach-violin folder.
+
+    ``$ARCO_SHARED_DATA/bach-violin``, else ``../shared/data/bach-violin`` next to ``repo``.
 
     Raises
     ------
