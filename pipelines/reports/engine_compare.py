@@ -13,7 +13,9 @@ distance to the other performers' recordings).
 Every source is measured the same way: :func:`pipelines.reports.timbre.measure` (MFCC-frame
 Frechet distance to the recording, centroid, harmonics 6-10 and 11-20 re harmonic 1),
 :func:`pipelines.reports.vibrato.vibrato_figures` (share, extent, rate, intonation spread),
-:func:`pipelines.reports.loudness.level_range_db`, :func:`pipelines.reports.joins.click_ratio`
+:func:`pipelines.reports.loudness.level_range_db`, the yardstick's median attack from the
+audio at the aligned notes' times (:func:`pipelines.listening.evaluate.evaluate`),
+:func:`pipelines.reports.joins.click_ratio`
 (largest jump over the local RMS slope) and
 :func:`pipelines.reports.joins.pitch_error_cents` (median error on sustained stretches
 against the pitch the rules' actions ask for); each engine also gets its real-time factor
@@ -41,7 +43,8 @@ DATABASE_ENGINES = ("frames", "cws")
 #: Figures per source and recording, in report order.
 FIGURES = ("mfcc_frechet", "centroid_hz", "h6_10_db", "h11_20_db", "vibrato_share",
            "vibrato_extent_cents", "vibrato_rate_hz", "intonation_spread_cents",
-           "level_range_db", "click_ratio", "pitch_error_cents", "real_time_factor")
+           "attack_ms", "level_range_db", "click_ratio", "pitch_error_cents",
+           "real_time_factor")
 TAIL_S = 0.5
 
 
@@ -108,12 +111,29 @@ def source_figures(audio: np.ndarray, table, real_mfcc: np.ndarray | None,
     f["mfcc_frechet"] = None if real_mfcc is None else timbre.frechet_distance(m.mfcc, real_mfcc)
     f.update({k: v for k, v in vibrato.vibrato_figures(audio, SAMPLE_RATE, table).items()
               if k in FIGURES})
+    f["attack_ms"] = attack_ms(audio, table)
     f["level_range_db"] = loudness.level_range_db(audio, SAMPLE_RATE, table)
     f["click_ratio"] = click_ratio(audio, SAMPLE_RATE)[0]
     pe = pitch_error_cents(audio, SAMPLE_RATE, *pitch)
     f["pitch_error_cents"] = pe["median_abs_cents"]
     f["pitch_within_10_cents"] = pe["share_within_10_cents"]
     return f, m.mfcc
+
+
+def attack_ms(audio: np.ndarray, table) -> float | None:
+    """Median attack (ms) of the audio at the aligned notes' times (None: not measurable).
+
+    The yardstick's audio-only path: :func:`pipelines.listening.evaluate.evaluate` with
+    ``timed_notes``.
+    """
+    from pipelines.listening.evaluate import evaluate
+
+    try:
+        got = evaluate(audio, sample_rate=SAMPLE_RATE, timed_notes=table)["piece"]
+    except ParameterError:
+        return None
+    value = got["attack_ms_median"]
+    return float(value) if np.isfinite(value) else None
 
 
 def play_engine(name: str, actions, db: Any, recording: str, seed: int,
