@@ -78,6 +78,8 @@ def test_modal_alone_needs_no_database(data, tmp_path, capsys):
     (["--engines", "modal,frames"], "--engines frames needs --audio-db"),
     (["--engines", "modal,cws"], "--engines cws needs --audio-db"),
     (["--engines", "modal,harp"], "unknown engine harp"),
+    (["score.mxl", "--engines", "modal"], "give no SCORE"),
+    (["score.mxl", "--audio-db", "adb"], "apply to --engines"),
 ])
 def test_bad_engine_options_are_one_line_exit_2(data, tmp_path, capsys, argv, message):
     root, _ = data
