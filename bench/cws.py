@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import tempfile
 import time
@@ -49,8 +48,9 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from data_schemas.errors import ArcoError, ParameterError  # noqa: E402
+from data_schemas.errors import ArcoError  # noqa: E402
 from pipelines.reports import baselines, recordings, timbre  # noqa: E402
+from pipelines.reports.leave_out import shared_recordings_folder, without  # noqa: E402
 
 SAMPLE_RATE = 44100
 ANALYSIS_RATE = 22050
@@ -63,26 +63,8 @@ def say(*parts: Any) -> None:
 
 
 def shared_folder() -> Path:
-    """The shared bach-violin folder."""
-    for c in (os.environ.get("ARCO_SHARED_DATA"), ROOT.parent / "shared" / "data",
-              "/work/shared/data"):
-        if c and (Path(c) / "bach-violin" / "notes").is_dir():
-            return Path(c) / "bach-violin"
-    raise ParameterError("bach-violin data not found: set ARCO_SHARED_DATA or give --data")
-
-
-def without(db: Any, recording: str) -> Any:
-    """The database minus one recording (any frozen AudioDatabase-like dataclass)."""
-    import dataclasses
-
-    keep = [r for r in db.audio_paths if r != recording]
-    if recording not in db.audio_paths:
-        raise ParameterError(f"audio database has no recording {recording!r} to leave out "
-                             f"(it has {sorted(db.audio_paths)})")
-    return dataclasses.replace(
-        db, frames=db.frames[db.frames["recording"].isin(keep)].reset_index(drop=True),
-        notes=db.notes[db.notes["recording"].isin(keep)].reset_index(drop=True),
-        audio_paths={r: db.audio_paths[r] for r in keep})
+    """The shared bach-violin folder (as ``arco compare --engines`` finds it)."""
+    return shared_recordings_folder(ROOT)
 
 
 def monophonic(table: pd.DataFrame) -> pd.DataFrame:
@@ -169,7 +151,7 @@ def leave_one_out(db: Any, rec: recordings.Recording, args: argparse.Namespace,
     real = timbre.measure(real_audio, SAMPLE_RATE, table)
     out: dict[str, Any] = {"notes": len(table), "monophonic_notes": len(mono),
                            "real": figures(real_audio, table, mono, None)}
-    train_db = without(db, rec.name)
+    train_db = without(db, rec.name, workdir / f"db-without-{rec.name}")
     t0 = time.perf_counter()
     trained_model(train_db, n_clusters=args.clusters, seed=args.seed)
     out["train_s"] = time.perf_counter() - t0

@@ -13,10 +13,12 @@ notes of the first ``--seconds`` are played at their aligned times by
 - ``feedback`` with ``--models DIR``, ``sampling`` (``sampling-open`` without models) with
   ``--db DB``;
 - ``frames``: the rules' actions played by the ``frames`` engine on an audio-frame database
-  built (into a temporary folder) from the *other* recordings: leave one recording out.
+  built once (into a temporary folder) from the recordings, the measured one left out
+  (:func:`pipelines.reports.leave_out.without`, shared with ``arco compare --engines``).
   Its extra figures (``frames`` in the report, per recording and mean): database build
-  time, search and render time, real-time factor, pitch error on sustained stretches
-  against the actions' pitch (the rules' source gets the same figure), clicks;
+  time (of the whole database, once), search and render time, real-time factor, pitch
+  error on sustained stretches against the actions' pitch (the rules' source gets the
+  same figure), clicks;
 
 and every source, the recording (``real``) included, is measured the same way by
 :func:`pipelines.reports.timbre.measure` (44.1 kHz mono, loudness-normalised, up to 14 kHz):
@@ -138,14 +140,12 @@ def pitch_figures(audio: np.ndarray, actions) -> dict[str, Any]:
                                                           tg.f0).items()}
 
 
-def leave_one_out(recs: list[recordings.Recording], left_out: str, root: Path) -> Path:
-    """A folder laid out like bach-violin with every recording but ``left_out`` (links)."""
-    data = root / f"without-{left_out}"
+def dataset_folder(recs: list[recordings.Recording], root: Path) -> Path:
+    """A folder laid out like bach-violin with every recording (links), for the build."""
+    data = root / "recordings"
     for sub in ("audio", "notes", "alignments"):
         (data / sub).mkdir(parents=True, exist_ok=True)
     for r in recs:
-        if r.name == left_out:
-            continue
         for src, sub in ((r.audio, "audio"), (r.notes, "notes"), (r.alignment, "alignments")):
             link = data / sub / src.name
             if not link.exists():
@@ -153,33 +153,22 @@ def leave_one_out(recs: list[recordings.Recording], left_out: str, root: Path) -
     return data
 
 
-def _reuse_analyses(root: Path, db: Path) -> None:
-    """Copy the per-recording tables of earlier leave-one-out databases into ``db``.
-
-    The build resumes from them (same recording, same settings: same file), so each
-    database analyses only the recording the earlier ones left out.
-    """
-    import shutil
-
-    for other in sorted(root.glob("db-without-*")):
-        for sub in ("frames", "notes"):
-            for f in (other / sub).glob("*.parquet"):
-                (db / sub).mkdir(parents=True, exist_ok=True)
-                if not (db / sub / f.name).exists():
-                    shutil.copy2(f, db / sub / f.name)
-
-
 def frames_renderer(args: argparse.Namespace, config: dict, recs: list[recordings.Recording]):
-    """The ``frames`` source: rules' actions on a database without the measured recording."""
+    """The ``frames`` source: rules' actions on the audio-frame database of every recording,
+    the measured one left out (:func:`pipelines.reports.leave_out.without`, as ``arco
+    compare --engines``); the database is built once, on first use."""
     import atexit
     import shutil
 
     root = Path(tempfile.mkdtemp(prefix="arco-frames-"))
     atexit.register(shutil.rmtree, root, ignore_errors=True)
+    whole: dict[str, Any] = {}
 
     def frames(table, midi, n):
+        from data_schemas.audio_frames import read_audio_database
         from gesture_db.audio_build import build_audio_database
         from pipelines.methods.rules import render
+        from pipelines.reports.leave_out import without
         from pipelines.score import read_score
         from synth.engines import get_engine
 
@@ -187,9 +176,12 @@ def frames_renderer(args: argparse.Namespace, config: dict, recs: list[recording
         if len(recs) < 2:
             raise baselines.PeerMissingError("frames needs at least two recordings")
         t0 = time.perf_counter()
-        db = root / f"db-without-{name}"
-        _reuse_analyses(root, db)
-        built = build_audio_database([leave_one_out(recs, name, root)], db, progress=False)
+        if "db" not in whole:
+            build_audio_database([dataset_folder(recs, root)], root / "db", progress=False)
+            whole["db"], whole["build_s"] = read_audio_database(root / "db"), \
+                time.perf_counter() - t0
+        rec = next(r for r in recs if r.name == name)
+        db = without(whole["db"], rec.audio.stem, root / f"db-without-{name}")
         t1 = time.perf_counter()
         actions = render(read_score(midi), config, parts=[0], seed=args.seed, audio=False,
                          sample_rate=SAMPLE_RATE, transpose_octaves=True,
@@ -202,9 +194,8 @@ def frames_renderer(args: argparse.Namespace, config: dict, recs: list[recording
         t3 = time.perf_counter()
         again, _ = engine.render(actions, tail=0.5)
         EXTRAS.setdefault("frames", {})[name] = {
-            "db_recordings": len(recs) - 1, "db_recordings_resumed": built["resumed_recordings"],
-            "db_build_s": t1 - t0, "setup_s": t2 - t1,
-            "render_s": t3 - t2, "search_s": engine.search_seconds,
+            "db_recordings": len(db.audio_paths), "db_build_s": whole["build_s"],
+            "setup_s": t2 - t1, "render_s": t3 - t2, "search_s": engine.search_seconds,
             "real_time_factor": (audio.size / SAMPLE_RATE) / (t3 - t2),
             "bit_identical": bool(audio.tobytes() == again.tobytes()),
             **pitch_figures(audio, actions)}

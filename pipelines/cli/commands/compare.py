@@ -2,6 +2,10 @@
 
 ``arco compare --heldout [PROTOCOL.toml]`` plays the held-out protocol's excerpts (all four
 parts) from the shared data folder instead of given scores.
+
+``arco compare --engines modal,frames,cws --audio-db ADB [--recordings DIR] -o report/``
+plays real recordings' aligned notes on the engines, leaving each recording out of the
+audio-frame database (:mod:`pipelines.reports.engine_compare`).
 """
 
 from __future__ import annotations
@@ -55,7 +59,45 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--sample-rate", type=int, default=44100, metavar="HZ",
                    help="audio sample rate in Hz")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    eng = p.add_argument_group(
+        "engines against real recordings (--engines; no SCORE)",
+        "each annotated recording's first --seconds of aligned notes, performed by the rules "
+        "(seed: the first of a --seeds list, else 0), played by every engine; frames and cws "
+        "get ADB without that recording; beside FluidR3 and the recording itself")
+    eng.add_argument("--engines", metavar="E,E,...",
+                     help="comma-separated engines (arco engines lists them), e.g. "
+                          "modal,frames,cws")
+    eng.add_argument("--audio-db", metavar="ADB",
+                     help="audio-frame database of the recordings (arco build-db --audio)")
+    eng.add_argument("--recordings", metavar="DIR",
+                     help="recordings laid out like bach-violin (audio/, notes/, alignments/; "
+                          "default: $ARCO_SHARED_DATA/bach-violin, else "
+                          "../shared/data/bach-violin next to the repository)")
+    eng.add_argument("--seconds", type=float, default=30.0, metavar="S",
+                     help="first S seconds of each recording (default 30)")
     p.set_defaults(func=run)
+
+
+def run_engines(args: argparse.Namespace, say) -> int:
+    """``--engines``: engines against real recordings, one left out at a time."""
+    from pathlib import Path
+
+    from data_schemas.errors import ParameterError
+    from pipelines.reports.engine_compare import check_engines, compare_engines
+    from pipelines.reports.leave_out import shared_recordings_folder
+
+    if args.scores or args.heldout is not None:
+        raise ParameterError("--engines plays recordings: give no SCORE and no --heldout")
+    engines = check_engines(args.engines.split(","), args.audio_db)
+    folder = args.recordings or shared_recordings_folder(Path(__file__).resolve().parents[3])
+    seed = args.seeds[0] if isinstance(args.seeds, list) else 0
+    with removed_on_failure(args.output):
+        results = compare_engines(engines, folder, args.output, audio_db=args.audio_db,
+                                  seconds=args.seconds, seed=seed, progress=not args.quiet,
+                                  log=say)
+    print(results["verdict"])
+    say(f"wrote {args.output}/index.html, results.json, bars-*.png")
+    return 0
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,6 +107,10 @@ def run(args: argparse.Namespace) -> int:
 
     output_dir(args.output)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
+    if args.engines is not None:
+        return run_engines(args, say)
+    if args.audio_db or args.recordings:
+        raise ParameterError("--audio-db and --recordings apply to --engines")
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     n_seeds = args.seeds
     title = None
