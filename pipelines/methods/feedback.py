@@ -33,6 +33,10 @@ from synth.listening.features import HOP
 #: Dynamic level (0..9, p = 3 .. f = 6) of each trained lane.
 LANE_LEVELS = {"p": 3, "mp": 4, "mf": 5, "f": 6}
 TAIL = 1.0  # s of ring-out after the last hop
+#: The control law of ``--method feedback``: a trim of the rules' force within 1/2..2 (a 2x
+#: error is what the fast step corrects; unbounded, misjudged hops drove the factor to
+#: 0.08-3.5 on a viola part whose rules-played sustained hops the teacher called 94 % good).
+FEEDBACK_SETTINGS = ControllerSettings(range_margin=0.0, trim=2.0)
 
 
 def lane_of(level: np.ndarray) -> np.ndarray:
@@ -189,7 +193,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     rng : numpy.random.Generator, optional
         Source of the rules' skill jitter (as in :func:`pipelines.methods.rules.render`).
     settings : ControllerSettings, optional
-        Tuning of the control law (default :class:`ControllerSettings`).
+        Tuning of the control law (default :data:`FEEDBACK_SETTINGS`).
     diagnostics : bool
         Record the instrument's contact diagnostics (for the evaluation; the controller
         never reads them).
@@ -227,7 +231,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
         raise ModelError(f"feedback needs {name} models for this {name} part: {exc}") from None
     inst = get_engine(engine, name, sample_rate=sample_rate, seed=seed)
     log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 1]),
-                    settings=settings or ControllerSettings(range_margin=0.0),
+                    settings=settings or FEEDBACK_SETTINGS,
                     record_diagnostics=diagnostics,
                     planned_force=planned_forces(perf, plan, sample_rate))
     tail = inst.process(int(TAIL * sample_rate), {}, diagnostics=False).audio

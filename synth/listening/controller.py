@@ -54,6 +54,12 @@ class ControllerSettings:
         Force factor per hop at full confidence (``2 ** (1 / 6)``: a 2x error in 6 hops).
     good_share : float
         No correction while the averaged probability of class 3 is at least this.
+    change_hops : int
+        Hops after a finger change inside a stroke without the law (the analysis window
+        still holds the previous note: measured on viola and cello quartet parts, those hops
+        were heard as classes 4-5 and pulled the force down).
+    trim : float
+        Correcting a planned force: the factor stays within ``1 / trim .. trim`` (0: off).
     grace_hops : int
         Hops after a stroke starts during which the controller listens but neither averages
         nor applies the law (25 hops, 145 ms: the bow's ramp to 0.33 m/s at 5 m/s^2, one
@@ -69,6 +75,8 @@ class ControllerSettings:
     grace_hops: int = 25
     step: float = 2.0 ** (1.0 / 6.0)
     good_share: float = 0.5
+    change_hops: int = 8
+    trim: float = 0.0
 
 
 class ForceController:
@@ -93,6 +101,7 @@ class ForceController:
         self._recent: deque[np.ndarray] = deque(maxlen=self.settings.average)
         self._last_speed = 0.0
         self._hops = 0
+        self._quiet = 0
         self.set_model(model, K=K)
 
     def set_model(self, model: PairModel, *, K: float | None = None) -> None:
@@ -104,12 +113,20 @@ class ForceController:
         margin = self.settings.range_margin
         self.bounds = ((good[0] / margin, min(good[1] * margin, MAX_FORCE)) if good and margin
                        else (0.0, MAX_FORCE))
+        if self.settings.trim:
+            self.bounds = (1.0 / self.settings.trim, self.settings.trim)
 
     def start_note(self, semitones: float, force: float | None = None) -> None:
         """Begin a note: initial force of the pair at this finger (or ``force``), N."""
         self.force = float(self.model.initial_force(semitones) if force is None else force)
         self._recent.clear()
         self._hops = 0
+        self._quiet = 0
+
+    def finger_changed(self) -> None:
+        """A new note inside the stroke: forget what was heard, listen ``change_hops``."""
+        self._recent.clear()
+        self._quiet = self.settings.change_hops
 
     def rescale(self, factor: float) -> None:
         """Scale the force (a finger change inside a slur)."""
@@ -140,7 +157,8 @@ class ForceController:
         s = self.settings
         c = 0
         self._hops += 1
-        settled = self._hops > s.grace_hops
+        self._quiet -= 1
+        settled = self._hops > s.grace_hops and self._quiet < 0
         if features is not None:
             probabilities, c = self.predict.probabilities(features)
             if settled:
@@ -355,6 +373,8 @@ class _HopLoop:
             ctl.rescale(model.initial_force(semitones[i])
                         / max(model.initial_force(old), 1e-9))
         else:
+            if self.finger_change[i]:
+                ctl.finger_changed()
             speed = abs(self.velocity[i - self.n_strings]) if k else 0.0
             if self.jitter:
                 self.classes[i] = ctl.step(self.features.get(s), speed, self.target_speed[i],
