@@ -33,10 +33,12 @@ from synth.listening.features import HOP
 #: Dynamic level (0..9, p = 3 .. f = 6) of each trained lane.
 LANE_LEVELS = {"p": 3, "mp": 4, "mf": 5, "f": 6}
 TAIL = 1.0  # s of ring-out after the last hop
-#: The control law of ``--method feedback``: a trim of the rules' force within 1/2..2 (a 2x
-#: error is what the fast step corrects; unbounded, misjudged hops drove the factor to
-#: 0.08-3.5 on a viola part whose rules-played sustained hops the teacher called 94 % good).
-FEEDBACK_SETTINGS = ControllerSettings(range_margin=0.0, trim=2.0)
+#: The control law of ``--method feedback``: a trim of the rules' force within 1/1.5..1.5
+#: that moves only while one side ("too little" / "too much") holds 85 % of the averaged
+#: class probabilities. Measured on Haydn op. 74/1 i, m. 1-8, seed 0 (bench/feedback_vs_rules.py):
+#: unbounded, misjudged hops drove the viola's factor to 0.08-3.5 (Helmholtz share 0.85
+#: against the rules' 0.98); trim 2 -> 0.72, trim 2 + 85 % -> 0.95, trim 1.5 + 85 % -> 0.98.
+FEEDBACK_SETTINGS = ControllerSettings(range_margin=0.0, trim=1.5, sure=0.85)
 
 
 def lane_of(level: np.ndarray) -> np.ndarray:

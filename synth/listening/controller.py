@@ -60,6 +60,9 @@ class ControllerSettings:
         were heard as classes 4-5 and pulled the force down).
     trim : float
         Correcting a planned force: the factor stays within ``1 / trim .. trim`` (0: off).
+    sure : float
+        No correction while neither side ("too little": classes 1-2, "too much": 4-5)
+        holds at least this probability (0: off).
     grace_hops : int
         Hops after a stroke starts during which the controller listens but neither averages
         nor applies the law (25 hops, 145 ms: the bow's ramp to 0.33 m/s at 5 m/s^2, one
@@ -77,6 +80,7 @@ class ControllerSettings:
     good_share: float = 0.5
     change_hops: int = 8
     trim: float = 0.0
+    sure: float = 0.0
 
 
 class ForceController:
@@ -167,7 +171,7 @@ class ForceController:
         self._last_speed = speed
         if c and settled and speed > s.min_speed_share * target_speed and not decelerating:
             self.force *= correction(sum(self._recent) / len(self._recent), self.K,
-                                     s.good_share)
+                                     s.good_share, s.sure)
         if s.jitter:
             if noise is None:
                 noise = float(self.rng.standard_normal())
@@ -180,11 +184,13 @@ class ForceController:
 DIRECTION = np.array([2.0, 1.0, 0.0, -1.0, -2.0])
 
 
-def correction(probabilities: np.ndarray, step: float, good_share: float) -> float:
+def correction(probabilities: np.ndarray, step: float, good_share: float,
+               sure: float = 0.0) -> float:
     """Force factor of one hop from averaged class probabilities.
 
-    ``step ** E[3 - c]`` under ``probabilities`` (of classes 1..5), 1 while class 3 holds at
-    least ``good_share``.
+    ``step ** E[3 - c]`` under ``probabilities`` (of classes 1..5); 1 while class 3 holds at
+    least ``good_share``, or while neither side (classes 1-2, "too little"; classes 4-5,
+    "too much") holds at least ``sure``.
 
     Examples
     --------
@@ -194,6 +200,8 @@ def correction(probabilities: np.ndarray, step: float, good_share: float) -> flo
     1.0
     """
     if probabilities[2] >= good_share:
+        return 1.0
+    if max(probabilities[0] + probabilities[1], probabilities[3] + probabilities[4]) < sure:
         return 1.0
     return float(step ** float(probabilities @ DIRECTION))
 

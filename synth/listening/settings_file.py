@@ -33,6 +33,7 @@ RANGES: dict[str, dict[str, tuple[type, float, float]]] = {
         "good_share": (float, 0.0, 1.0),
         "change_hops": (int, 0, 100000),
         "trim": (float, 0.0, 100.0),
+        "sure": (float, 0.0, 1.0),
     },
     "teacher": {
         "silent_db": (float, -200.0, 0.0),
