@@ -113,3 +113,33 @@ def test_initial_forces_monotone_in_dynamic():
                                np.array(list(trained.values())).mean(axis=0))
     ordered = {"p": [0.5, 0.6, 0.7], "f": [1.0, 1.1, 1.2]}
     assert monotone_in_dynamic(ordered, ("p", "mp", "mf", "f")) == ordered
+
+
+def test_unsure_probabilities_leave_the_force_alone():
+    # classes 2 and 5 heard at once: neither side holds 85 %
+    mixed = np.array([0.0, 0.45, 0.1, 0.0, 0.45])
+    assert correction(mixed, 1.2, 0.5, sure=0.85) == 1.0
+    assert correction(mixed, 1.2, 0.5) != 1.0
+    assert correction(np.array([0.0, 0.9, 0.1, 0.0, 0.0]), 1.2, 0.5, sure=0.85) > 1.0
+
+
+def test_trim_bounds_the_correction_factor():
+    # the plant says "too much" for ever (optimum far below): the factor stops at 1 / trim
+    settings = ControllerSettings(jitter=0.0, grace_hops=0, range_margin=0.0, trim=1.5)
+    ctl = ForceController(PlantModel(), np.random.default_rng(0), settings)
+    ctl.start_note(0.0, 1.0)
+    for _ in range(100):
+        ctl.step(np.array([100.0 * F_OPT]), 0.3, 0.3)
+    assert np.isclose(ctl.force, 1.0 / 1.5)
+
+
+def test_no_law_right_after_a_finger_change():
+    settings = ControllerSettings(jitter=0.0, grace_hops=0, range_margin=0.0, change_hops=8)
+    ctl = ForceController(PlantModel(), np.random.default_rng(0), settings)
+    ctl.start_note(0.0, 2.0 * F_OPT)
+    ctl.finger_changed()
+    forces = []
+    for _ in range(12):
+        ctl.step(np.array([2.0 * F_OPT]), 0.3, 0.3)
+        forces.append(ctl.force)
+    assert forces[:8] == [2.0 * F_OPT] * 8 and forces[8] < 2.0 * F_OPT
