@@ -4,7 +4,7 @@ from _listening import d_string_notes
 
 from data_schemas.actions import validate_actions
 from pipelines.listening.evaluate import evaluate
-from pipelines.methods.feedback import render_feedback
+from pipelines.methods.feedback import render_feedback, scale_notes
 from pipelines.perform.config import load_config
 from pipelines.perform.rules import perform_part
 from synth import render_with_diagnostics
@@ -50,3 +50,38 @@ def test_feedback_beats_wrong_fixed_forces(feedback):
         au, dg = render_with_diagnostics(wrong, instrument="violin", seed=0)
         theirs = evaluate(au, wrong, diagnostics=dg)["piece"]["sustained_class3_share"]
         assert ours > theirs + 0.2, (force, ours, theirs)
+
+
+def test_feedback_refuses_a_part_without_models_of_its_instrument(models_dir):
+    from synth.listening.classifier import ModelError
+
+    cello = scale_notes(tonic=48, octaves=1, instrument="cello")
+    with pytest.raises(ModelError, match="feedback needs cello models for this cello part"):
+        render_feedback(cello, CFG, models_dir=models_dir, seed=0)
+
+
+def test_feedback_loads_the_models_of_the_parts_instrument(models_dir, monkeypatch):
+    import synth.listening.classifier as classifier
+
+    asked = []
+    real = classifier.load_models
+
+    def spy(directory, instrument, *args):
+        asked.append(instrument)
+        return real(directory, "violin", *args)  # the fixture holds violin models only
+
+    monkeypatch.setattr(classifier, "load_models", spy)
+    viola = scale_notes(tonic=55, octaves=1, instrument="viola")  # G3 A3 B3: the G string
+    render_feedback(viola[viola["midi_pitch"] < 60], CFG, models_dir=models_dir, seed=0,
+                    diagnostics=False)
+    assert asked == ["viola"]
+
+
+def test_feedback_starts_each_note_at_the_rules_force(feedback):
+    _, actions, _, perf = feedback
+    rules = perf.actions[perf.actions["bow_force"] > 0]
+    played = actions[actions["bow_force"] > 0]
+    # The first hop of the first stroke plays the rules' force (within the 1 % jitter).
+    t0 = played["time"].iloc[0]
+    planned = np.interp(t0, rules["time"], rules["bow_force"])
+    assert abs(played["bow_force"].iloc[0] / planned - 1.0) < 0.05

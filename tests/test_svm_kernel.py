@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from naive_kernels import naive_svc_decisions, naive_svc_predict
 
 from data_schemas import ParameterError
-from synth.listening.svm_kernel import svc_predict
+from synth.listening.svm_kernel import svc_decisions, svc_predict
 
 
 def random_model(rng, n_class, dim):
@@ -39,6 +39,17 @@ def test_svc_predict_equals_its_twin(seed, n_class, dim):
     # may go either way.
     assume(np.abs(decisions).min() > 1e-9)
     assert svc_predict(x, **kernel_args(model, labels)) == naive_svc_predict(decisions, labels)
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n_class=st.integers(2, 5), dim=st.integers(1, 12))
+def test_svc_decisions_equal_their_twin(seed, n_class, dim):
+    rng = np.random.default_rng(seed)
+    model = random_model(rng, n_class, dim)
+    labels = np.arange(1, n_class + 1, dtype=np.int64)
+    x = model["mean"] + model["scale"] * rng.normal(size=dim)
+    np.testing.assert_allclose(svc_decisions(x, **kernel_args(model, labels)),
+                               naive_svc_decisions(x, **model), rtol=1e-9, atol=1e-9)
 
 
 GOOD = kernel_args(random_model(np.random.default_rng(0), 3, 4), np.array([1, 2, 3]))

@@ -3,9 +3,12 @@
 The rules (:func:`pipelines.perform.rules.perform_part`) choose string and finger from the pitch,
 bow velocity and beta from the dynamic (the "bow lanes"), the bow direction and where the bow
 is lifted. :func:`hop_plan` samples that plan once per hop of 256 samples; the feedback loop
-(:func:`synth.listening.play_plan`) then plays it, choosing the bow force from what it hears
-with the string x dynamic classifiers in ``models_dir``. The returned actions table records
-what the controller actually did (one frame per hop per string).
+(:func:`synth.listening.play_plan`) then plays it, correcting the bow force from what it hears
+with the string x dynamic classifiers of the part's instrument in ``models_dir``. Each note
+starts from the rules' own planned force (:func:`planned_forces`: from the note's dynamic,
+string, beta, bow velocity, length and attack envelope, which plays well open loop) and the
+controller owns a correction factor that starts at 1 on every stroke. The returned actions
+table records what the controller actually did (one frame per hop per string).
 """
 
 from __future__ import annotations
@@ -30,6 +33,12 @@ from synth.listening.features import HOP
 #: Dynamic level (0..9, p = 3 .. f = 6) of each trained lane.
 LANE_LEVELS = {"p": 3, "mp": 4, "mf": 5, "f": 6}
 TAIL = 1.0  # s of ring-out after the last hop
+#: The control law of ``--method feedback``: a trim of the rules' force within 1/1.5..1.5
+#: that moves only while one side ("too little" / "too much") holds 85 % of the averaged
+#: class probabilities. Measured on Haydn op. 74/1 i, m. 1-8, seed 0 (bench/feedback_vs_rules.py):
+#: unbounded, misjudged hops drove the viola's factor to 0.08-3.5 (Helmholtz share 0.85
+#: against the rules' 0.98); trim 2 -> 0.72, trim 2 + 85 % -> 0.95, trim 1.5 + 85 % -> 0.98.
+FEEDBACK_SETTINGS = ControllerSettings(range_margin=0.0, trim=1.5, sure=0.85)
 
 
 def lane_of(level: np.ndarray) -> np.ndarray:
@@ -186,7 +195,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     rng : numpy.random.Generator, optional
         Source of the rules' skill jitter (as in :func:`pipelines.methods.rules.render`).
     settings : ControllerSettings, optional
-        Tuning of the control law (default :class:`ControllerSettings`).
+        Tuning of the control law (default :data:`FEEDBACK_SETTINGS`).
     diagnostics : bool
         Record the instrument's contact diagnostics (for the evaluation; the controller
         never reads them).
@@ -205,7 +214,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
         The rules' plan (events, warnings) the controller followed.
     """
     from synth.engines import get_engine
-    from synth.listening.classifier import load_models
+    from synth.listening.classifier import ModelError, load_models
     from synth.listening.controller import play_plan
 
     if sample_rate not in (44100, 48000):
@@ -218,15 +227,47 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     perf = perform_part(notes, config, instrument=name, skill=skill, rng=rng, warp=warp,
                         transpose_octaves=transpose_octaves)
     plan, span = hop_plan(perf, config, name, sample_rate=sample_rate)
-    models = load_models(models_dir, name)
+    try:
+        models = load_models(models_dir, name)
+    except ModelError as exc:
+        raise ModelError(f"feedback needs {name} models for this {name} part: {exc}") from None
     inst = get_engine(engine, name, sample_rate=sample_rate, seed=seed)
     log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 1]),
-                    settings=settings, record_diagnostics=diagnostics)
+                    settings=settings or FEEDBACK_SETTINGS,
+                    record_diagnostics=diagnostics,
+                    planned_force=planned_forces(perf, plan, sample_rate))
     tail = inst.process(int(TAIL * sample_rate), {}, diagnostics=False).audio
     audio = np.concatenate([log.audio, tail]).astype(np.float32)
     actions = played_actions(perf, plan, span, log, sample_rate=sample_rate)
     table = diagnostics_table(log, sample_rate) if diagnostics else None
     return audio, actions, table, perf
+
+
+def planned_forces(perf: Performance, plan: HopPlan, sample_rate: int) -> np.ndarray:
+    """The rules' bow force (N) at each hop's end, per string (0 where not bowed).
+
+    Parameters
+    ----------
+    perf : Performance
+        The rules' output the plan was sampled from (:func:`hop_plan`).
+    plan : HopPlan
+    sample_rate : int, Hz
+
+    Returns
+    -------
+    np.ndarray [shape=(n_hops, n_strings)], N
+    """
+    n, n_strings = plan.bowed.shape
+    t = (np.arange(n) + 1) * HOP / sample_rate
+    out = np.zeros((n, n_strings))
+    actions = perf.actions
+    for s, rows in actions[~actions["pluck"]].groupby("string"):
+        time = rows["time"].to_numpy(np.float64).copy()
+        for i in np.flatnonzero(np.diff(time) <= 0.0) + 1:
+            time[i] = max(time[i], time[i - 1] + 1e-9)
+        force = np.interp(t, time, rows["bow_force"].to_numpy(np.float64))
+        out[:, int(s)] = np.where(plan.bowed[:, int(s)], force, 0.0)
+    return out
 
 
 def played_actions(perf: Performance, plan: HopPlan, span: np.ndarray, log: PerformanceLog, *,

@@ -28,7 +28,13 @@ from data_schemas.errors import ArcoError, ParameterError
 from data_schemas.io import atomic_path
 from data_schemas.paths import inside
 from synth.listening.features import FEATURE_NAMES
-from synth.listening.svm_kernel import check_svc_model, svc_predict_unchecked
+from synth.listening.initial_forces import monotone_in_dynamic
+from synth.listening.probabilities import CLASSES, vote_probabilities
+from synth.listening.svm_kernel import (
+    check_svc_model,
+    svc_decisions_unchecked,
+    svc_predict_unchecked,
+)
 
 #: 1: joblib pickles (refused since they can run code on load); 2: npz arrays + JSON.
 MODEL_FORMAT = 2
@@ -171,6 +177,35 @@ class FastPredictor:
         self._scratch = np.zeros(check_svc_model(self.mean, self.scale, self._sv_t, self.gamma,
                                                  self.dual, self.intercept, self.starts,
                                                  self._labels))
+        n_class = self._labels.size
+        self._dec = np.zeros(n_class * (n_class - 1) // 2)
+        self._pairs = np.array([(i, j) for i in range(n_class) for j in range(i + 1, n_class)],
+                               np.int64).reshape(-1, 2)
+        self._slot = self._labels - 1  # index of each class among CLASSES
+
+    def probabilities(self, x: np.ndarray) -> tuple[np.ndarray, int]:
+        """Probabilities of classes 1..5 for one feature row, and the voted class.
+
+        The one-vs-one decision values through :func:`vote_probabilities`; classes the
+        model never saw get 0. The class is that of :meth:`__call__`.
+
+        Returns
+        -------
+        probabilities : np.ndarray [shape=(5,)]
+            Of classes 1..5, summing to 1.
+        label : int
+        """
+        if type(x) is not np.ndarray or x.dtype != np.float64:
+            x = np.asarray(x, np.float64)
+        if x.shape != self.mean.shape:
+            raise ParameterError(f"x must hold {self.mean.size} features, got shape {x.shape}")
+        svc_decisions_unchecked(x, self.mean, self.scale, self._sv_t, self.gamma, self.dual,
+                                self.intercept, self.starts, self._scratch, self._dec)
+        votes = np.bincount(np.where(self._dec > 0, self._pairs[:, 0], self._pairs[:, 1]),
+                            minlength=self._labels.size)
+        out = np.zeros(len(CLASSES))
+        out[self._slot] = vote_probabilities(self._dec, self._labels.size)
+        return out, int(self._labels[int(np.argmax(votes))])
 
     def __call__(self, x: np.ndarray) -> int:
         """Class of one feature row [shape=(n_features,)]."""
@@ -391,6 +426,9 @@ def load_models(directory: str | os.PathLike, instrument: str,
                 n_strings: int = 4) -> dict[tuple[int, str], PairModel]:
     """Load every trained pair of ``instrument`` found in ``directory``.
 
+    Each string's initial forces are made non-decreasing from p to f
+    (:func:`synth.listening.initial_forces.monotone_in_dynamic`).
+
     Raises
     ------
     ModelError
@@ -409,4 +447,9 @@ def load_models(directory: str | os.PathLike, instrument: str,
     if not out:
         raise ModelError(f"{directory}: no trained {instrument} models "
                          f"(run `arco train --instrument {instrument} -o {directory}`)")
+    for s in range(n_strings):
+        trained = {d: out[(s, d)].metadata["initial_forces"] for d in DYNAMICS
+                   if (s, d) in out and out[(s, d)].metadata.get("initial_forces")}
+        for d, forces in monotone_in_dynamic(trained, DYNAMICS).items() if trained else ():
+            out[(s, d)].metadata["initial_forces"] = forces
     return out

@@ -2,12 +2,17 @@
 
 The controller hears only the audio (features of the last window) and knows only its own
 actions: it never reads the instrument's diagnostics or string constants. Per hop of 256
-samples (~172 Hz) it classifies the sound with the string x dynamic's classifier and scales
-the bow force, ``F <- F * K**(3 - c_avg)``, where ``c_avg`` is the mean class of the last
-``average`` hops; the law applies only while the bow moves faster than half the target
-velocity and does not decelerate. Force and velocity get 1 % Gaussian jitter each hop
-(a seeded generator); ``F >= 0``. A note starts at the initial force of its pair,
-interpolated by finger position.
+samples (~172 Hz) it takes the class probabilities of the string x dynamic's classifier
+(:meth:`FastPredictor.probabilities`), averages them over the last ``average`` hops and,
+unless class 3 ("good") has at least ``good_share`` of them, scales the bow force by
+``F <- F * step**E[3 - c]``: a full-confidence "too little" (class 2) raises it by ``step``
+per hop, so a 2x error is corrected in ``log 2 / log step`` hops (6 at the default). The law
+applies only while the bow moves faster than half the target velocity and does not
+decelerate. The trained K (1.005-1.05, 14-140 hops for a 2x error: longer than most notes)
+is kept in the model's metadata but the played law uses ``step``. Force and velocity get
+1 % Gaussian jitter each hop (a seeded generator); ``F >= 0``. A note starts at the initial
+force of its pair, interpolated by finger position (or, correcting a planned force, at a
+factor of 1).
 
 :func:`play_plan` plays a :class:`HopPlan` (per-hop controls planned by the rules: string,
 finger, velocity, beta, pair, note starts) with the controller owning the force.
@@ -36,8 +41,8 @@ class ControllerSettings:
     Attributes
     ----------
     average : int
-        Hops of classes averaged (Vivi's later code: 4; 8 here, measured on the scale of
-        ``bench/feedback_speed.py``: fewer let single misjudged hops move the force).
+        Hops of class probabilities averaged (Vivi's later code averages 4 hops of
+        classes; longer averages delay the law and make a fast step overshoot).
     min_speed_share : float
         The law applies only while |v| > this x target velocity.
     jitter : float
@@ -45,6 +50,19 @@ class ControllerSettings:
     range_margin : float
         The force stays within the forces judged acceptable in training (the controller's
         own experience) widened by this factor each way; 0 = only ``0 <= F <= 50 N``.
+    step : float
+        Force factor per hop at full confidence (``2 ** (1 / 6)``: a 2x error in 6 hops).
+    good_share : float
+        No correction while the averaged probability of class 3 is at least this.
+    change_hops : int
+        Hops after a finger change inside a stroke without the law (the analysis window
+        still holds the previous note: measured on viola and cello quartet parts, those hops
+        were heard as classes 4-5 and pulled the force down).
+    trim : float
+        Correcting a planned force: the factor stays within ``1 / trim .. trim`` (0: off).
+    sure : float
+        No correction while neither side ("too little": classes 1-2, "too much": 4-5)
+        holds at least this probability (0: off).
     grace_hops : int
         Hops after a stroke starts during which the controller listens but neither averages
         nor applies the law (25 hops, 145 ms: the bow's ramp to 0.33 m/s at 5 m/s^2, one
@@ -53,11 +71,16 @@ class ControllerSettings:
         87 % of sustained hops at 15 hops, 91.5 % at 25, 91.7 % at 35.
     """
 
-    average: int = 8
+    average: int = 3
     min_speed_share: float = 0.5
     jitter: float = 0.01
     range_margin: float = 2.0
     grace_hops: int = 25
+    step: float = 2.0 ** (1.0 / 6.0)
+    good_share: float = 0.5
+    change_hops: int = 8
+    trim: float = 0.0
+    sure: float = 0.0
 
 
 class ForceController:
@@ -71,7 +94,7 @@ class ForceController:
         Source of the jitter.
     settings : ControllerSettings, optional
     K : float, optional
-        Override the model's K (training searches).
+        Step factor of the law instead of ``settings.step`` (training searches).
     """
 
     def __init__(self, model: PairModel, rng: np.random.Generator,
@@ -79,26 +102,35 @@ class ForceController:
         self.settings = settings or ControllerSettings()
         self.rng = rng
         self.force = 0.0
-        self._recent: deque[int] = deque(maxlen=self.settings.average)
+        self._recent: deque[np.ndarray] = deque(maxlen=self.settings.average)
         self._last_speed = 0.0
         self._hops = 0
+        self._quiet = 0
         self.set_model(model, K=K)
 
     def set_model(self, model: PairModel, *, K: float | None = None) -> None:
         """Switch classifier (a dynamic change); keep the force."""
         self.model = model
-        self.K = float(model.K if K is None else K)
+        self.K = float(self.settings.step if K is None else K)
         self.predict = model.fast()
         good = model.metadata.get("good_range")
         margin = self.settings.range_margin
         self.bounds = ((good[0] / margin, min(good[1] * margin, MAX_FORCE)) if good and margin
                        else (0.0, MAX_FORCE))
+        if self.settings.trim:
+            self.bounds = (1.0 / self.settings.trim, self.settings.trim)
 
     def start_note(self, semitones: float, force: float | None = None) -> None:
         """Begin a note: initial force of the pair at this finger (or ``force``), N."""
         self.force = float(self.model.initial_force(semitones) if force is None else force)
         self._recent.clear()
         self._hops = 0
+        self._quiet = 0
+
+    def finger_changed(self) -> None:
+        """A new note inside the stroke: forget what was heard, listen ``change_hops``."""
+        self._recent.clear()
+        self._quiet = self.settings.change_hops
 
     def rescale(self, factor: float) -> None:
         """Scale the force (a finger change inside a slur)."""
@@ -129,22 +161,49 @@ class ForceController:
         s = self.settings
         c = 0
         self._hops += 1
-        settled = self._hops > s.grace_hops
+        self._quiet -= 1
+        settled = self._hops > s.grace_hops and self._quiet < 0
         if features is not None:
-            c = self.predict(features)
+            probabilities, c = self.predict.probabilities(features)
             if settled:
-                self._recent.append(c)
+                self._recent.append(probabilities)
         decelerating = speed < self._last_speed - 1e-9
         self._last_speed = speed
         if c and settled and speed > s.min_speed_share * target_speed and not decelerating:
-            c_avg = sum(self._recent) / len(self._recent)
-            self.force *= self.K ** (3.0 - c_avg)
+            self.force *= correction(sum(self._recent) / len(self._recent), self.K,
+                                     s.good_share, s.sure)
         if s.jitter:
             if noise is None:
                 noise = float(self.rng.standard_normal())
             self.force *= 1.0 + s.jitter * noise
         self.force = min(max(self.force, self.bounds[0]), self.bounds[1])
         return c
+
+
+#: 3 - c of the classes 1..5: the direction the force should move (class 2: up).
+DIRECTION = np.array([2.0, 1.0, 0.0, -1.0, -2.0])
+
+
+def correction(probabilities: np.ndarray, step: float, good_share: float,
+               sure: float = 0.0) -> float:
+    """Force factor of one hop from averaged class probabilities.
+
+    ``step ** E[3 - c]`` under ``probabilities`` (of classes 1..5); 1 while class 3 holds at
+    least ``good_share``, or while neither side (classes 1-2, "too little"; classes 4-5,
+    "too much") holds at least ``sure``.
+
+    Examples
+    --------
+    >>> correction(np.array([0.0, 1.0, 0.0, 0.0, 0.0]), 1.2, 0.5)  # surely too little
+    1.2
+    >>> correction(np.array([0.0, 0.3, 0.6, 0.1, 0.0]), 1.2, 0.5)  # good enough
+    1.0
+    """
+    if probabilities[2] >= good_share:
+        return 1.0
+    if max(probabilities[0] + probabilities[1], probabilities[3] + probabilities[4]) < sure:
+        return 1.0
+    return float(step ** float(probabilities @ DIRECTION))
 
 
 @dataclass
@@ -322,6 +381,8 @@ class _HopLoop:
             ctl.rescale(model.initial_force(semitones[i])
                         / max(model.initial_force(old), 1e-9))
         else:
+            if self.finger_change[i]:
+                ctl.finger_changed()
             speed = abs(self.velocity[i - self.n_strings]) if k else 0.0
             if self.jitter:
                 self.classes[i] = ctl.step(self.features.get(s), speed, self.target_speed[i],

@@ -29,6 +29,11 @@ RANGES: dict[str, dict[str, tuple[type, float, float]]] = {
         "jitter": (float, 0.0, 0.5),
         "range_margin": (float, 0.0, 100.0),
         "grace_hops": (int, 0, 100000),
+        "step": (float, 1.0, 10.0),
+        "good_share": (float, 0.0, 1.0),
+        "change_hops": (int, 0, 100000),
+        "trim": (float, 0.0, 100.0),
+        "sure": (float, 0.0, 1.0),
     },
     "teacher": {
         "silent_db": (float, -200.0, 0.0),

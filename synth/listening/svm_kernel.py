@@ -14,20 +14,21 @@ from synth.array_checks import check_array, check_size
 
 
 @njit(cache=True)
-def svc_predict_unchecked(x, mean, scale, sv_t, gamma, dual, intercept, starts, labels,
-                          scratch):  # pragma: no cover - numba
-    """One row through libsvm's ``svm_predict`` (C-SVC, RBF, dense); returns the class label.
+def svc_decisions_unchecked(x, mean, scale, sv_t, gamma, dual, intercept, starts, scratch,
+                            out):  # pragma: no cover - numba
+    """One row's one-vs-one decision values (libsvm's C-SVC, RBF, dense) into ``out``.
 
-    ``sv_t`` holds the support vectors transposed [shape=(n_features, n_sv)], so the squared
-    distances run over all support vectors at once, each summed in libsvm's feature order.
-    ``scratch`` holds ``n_sv + n_features + n_classes`` floats. Nothing is checked: use
-    :func:`svc_predict`, or :func:`check_svc_model` once before calling this per row.
+    ``out`` holds one value per class pair ``(i, j)``, ``i < j`` in libsvm's order; a
+    positive value is a vote for class ``i``. ``sv_t`` holds the support vectors transposed
+    [shape=(n_features, n_sv)], so the squared distances run over all support vectors at
+    once, each summed in libsvm's feature order. ``scratch`` holds at least
+    ``n_sv + n_features`` floats. Nothing is checked: use :func:`svc_decisions`, or
+    :func:`check_svc_model` once before calling this per row.
     """
     dim, n_sv = sv_t.shape
-    n_class = labels.size
+    n_class = starts.size - 1
     kvalue = scratch[:n_sv]
     z = scratch[n_sv:n_sv + dim]
-    vote = scratch[n_sv + dim:n_sv + dim + n_class]
     for i in range(dim):
         z[i] = (x[i] - mean[i]) / scale[i]
     for s in range(n_sv):
@@ -40,8 +41,6 @@ def svc_predict_unchecked(x, mean, scale, sv_t, gamma, dual, intercept, starts, 
             kvalue[s] += d * d
     for s in range(n_sv):
         kvalue[s] = np.exp(-gamma * kvalue[s])
-    for c in range(n_class):
-        vote[c] = 0.0
     p = 0
     for i in range(n_class):
         for j in range(i + 1, n_class):
@@ -50,8 +49,32 @@ def svc_predict_unchecked(x, mean, scale, sv_t, gamma, dual, intercept, starts, 
                 acc += dual[j - 1, k] * kvalue[k]
             for k in range(starts[j], starts[j + 1]):
                 acc += dual[i, k] * kvalue[k]
-            acc -= -intercept[p]
-            if acc > 0:
+            out[p] = acc - -intercept[p]
+            p += 1
+
+
+@njit(cache=True)
+def svc_predict_unchecked(x, mean, scale, sv_t, gamma, dual, intercept, starts, labels,
+                          scratch):  # pragma: no cover - numba
+    """One row through libsvm's ``svm_predict`` (C-SVC, RBF, dense); returns the class label.
+
+    The decision values of :func:`svc_decisions_unchecked` and the vote with ties to the
+    lowest class. ``scratch`` holds ``n_sv + n_features + n_classes`` floats plus one per
+    class pair. Nothing is checked: use :func:`svc_predict`, or :func:`check_svc_model`
+    once before calling this per row.
+    """
+    dim, n_sv = sv_t.shape
+    n_class = labels.size
+    n_pairs = n_class * (n_class - 1) // 2
+    vote = scratch[n_sv + dim:n_sv + dim + n_class]
+    dec = scratch[n_sv + dim + n_class:n_sv + dim + n_class + n_pairs]
+    svc_decisions_unchecked(x, mean, scale, sv_t, gamma, dual, intercept, starts, scratch, dec)
+    for c in range(n_class):
+        vote[c] = 0.0
+    p = 0
+    for i in range(n_class):
+        for j in range(i + 1, n_class):
+            if dec[p] > 0:
                 vote[i] += 1.0
             else:
                 vote[j] += 1.0
@@ -73,7 +96,7 @@ def check_svc_model(mean: np.ndarray, scale: np.ndarray, sv_t: np.ndarray, gamma
     Returns
     -------
     int
-        ``n_sv + n_features + n_classes``: the floats of ``scratch``.
+        ``n_sv + n_features + n_classes + n_pairs``: the floats of ``scratch``.
 
     Raises
     ------
@@ -103,7 +126,7 @@ def check_svc_model(mean: np.ndarray, scale: np.ndarray, sv_t: np.ndarray, gamma
                              f"got {starts.tolist()}")
     if not np.isfinite(gamma) or gamma < 0:
         raise ParameterError(f"gamma must be finite and >= 0, got {gamma!r}")
-    return n_sv + dim + n_class
+    return n_sv + dim + n_class + n_class * (n_class - 1) // 2
 
 
 def svc_predict(x: np.ndarray, mean: np.ndarray, scale: np.ndarray, sv_t: np.ndarray,
@@ -152,4 +175,41 @@ def svc_predict(x: np.ndarray, mean: np.ndarray, scale: np.ndarray, sv_t: np.nda
                                      starts, labels, np.empty(n_scratch)))
 
 
-__all__ = ["check_svc_model", "svc_predict", "svc_predict_unchecked"]
+def svc_decisions(x: np.ndarray, mean: np.ndarray, scale: np.ndarray, sv_t: np.ndarray,
+                  gamma: float, dual: np.ndarray, intercept: np.ndarray, starts: np.ndarray,
+                  labels: np.ndarray) -> np.ndarray:
+    """One-vs-one decision values of one feature row under a fitted scaler + RBF ``SVC``.
+
+    Parameters are those of :func:`svc_predict`.
+
+    Returns
+    -------
+    np.ndarray [shape=(n_classes * (n_classes - 1) / 2,)]
+        One value per class pair ``(i, j)``, ``i < j`` (libsvm's order, classes in the
+        order of ``labels``); positive votes for ``i``.
+
+    Raises
+    ------
+    ParameterError
+        See :func:`check_svc_model`; also a row of another dtype or length.
+
+    Examples
+    --------
+    >>> d = svc_decisions(np.zeros(1), np.zeros(1), np.ones(1), np.array([[0.0, 1.0]]), 1.0,
+    ...                   np.array([[1.0, -1.0]]), np.zeros(1), np.array([0, 1, 2]),
+    ...                   np.array([1, 2]))
+    >>> round(float(d[0]), 4)  # exp(0) - exp(-1)
+    0.6321
+    """
+    n_scratch = check_svc_model(mean, scale, sv_t, gamma, dual, intercept, starts, labels)
+    check_array("x", x, np.float64, 1)
+    check_size("x", x, mean.size, "one per feature")
+    n_class = labels.size
+    out = np.empty(n_class * (n_class - 1) // 2)
+    svc_decisions_unchecked(x, mean, scale, sv_t, float(gamma), dual, intercept, starts,
+                            np.empty(n_scratch), out)
+    return out
+
+
+__all__ = ["check_svc_model", "svc_decisions", "svc_decisions_unchecked", "svc_predict",
+           "svc_predict_unchecked"]

@@ -5,15 +5,16 @@
 2. the performance rules: the opening of Mozart's quartet K. 421 (bundled, public domain),
    every part on its own instrument (``mozart-k421-rules.wav``, actions, bowing plot);
 3. gesture sampling against feedback control: simulate a small set of bowing recordings,
-   build the gesture database, train the listening models (reused when ``out/models``
-   already holds them), and compare rules, feedback, sampling and open-loop sampling on
-   the first violin's opening with two seeds (``report/index.html``,
+   build the gesture database, train the listening models of violin, viola and cello
+   (quick settings; reused when ``out/models`` already holds them), play the quartet's
+   opening with feedback control, every part with its own instrument's models
+   (``mozart-k421-feedback.wav``), and compare rules, feedback, sampling and open-loop
+   sampling on the first violin's opening with two seeds (``report/index.html``,
    ``report/results.json``);
 4. a quick run of the held-out protocol (``pipelines/data/heldout.toml``: its first two
    excerpts, four measures each, all four parts, two seeds) when the shared data folder is
    there (``$ARCO_SHARED_DATA`` or ``../shared/data``; the report says when it is not):
-   ``heldout/index.html``. Methods that listen need models of every instrument the
-   quartet plays; without viola and cello models only the open-loop methods run.
+   ``heldout/index.html``.
 
 ``report.md`` says what was played and what was measured. Each step of part 3 is an
 ``arco`` command, printed as it runs, so it can be repeated on one's own data.
@@ -151,8 +152,13 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
          "--seed", str(seed + 1), "-o", str(out / "recordings")],
         ["build-db", str(out / "recordings"), "-o", str(out / "db"), "--workers", str(workers)],
         ["db", "info", str(out / "db"), "--no-plots"],
-        ["train", "--instrument", "violin", "--teacher", "auto", "--quick",
-         "-o", str(out / "models"), "--workers", str(workers), "--seed", str(seed)],
+        *(["train", "--instrument", name, "--teacher", "auto", "--quick",
+           "-o", str(out / "models"), "--workers", str(workers), "--seed", str(seed)]
+          for name in INSTRUMENT_NAMES),
+        ["render", str(bundled_score()), "--method", "feedback", "--models", str(out / "models"),
+         "--all-parts", "--start-measure", str(DEMO_MEASURES[0]), "--end-measure",
+         str(DEMO_MEASURES[1]), "--seed", str(seed), "--quiet",
+         "-o", str(out / f"{bundled_score().stem}-feedback.wav")],
         ["compare", str(bundled_score()), "--methods", "rules,feedback,sampling,sampling-open",
          "--db", str(out / "db"), "--models", str(out / "models"), "--part", "0",
          "--start-measure", str(DEMO_MEASURES[0]), "--end-measure", str(DEMO_MEASURES[1]),
@@ -166,14 +172,17 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
         code = main(step)
         if code != 0:
             raise RuntimeError(f"demo step failed: arco {' '.join(step)}")
-        timings.append((step[0] if step[0] != "db" else "db info", time.perf_counter() - start))
+        label = {"db": "db info", "train": f"train {step[2]}"}.get(step[0], step[0])
+        timings.append((label, time.perf_counter() - start))
     results = json.loads((out / "report" / "results.json").read_text())
+    stem = bundled_score().stem
     lines = ["## Gesture sampling against feedback control", "",
              f"{notes} simulated notes by {performers} performers -> gesture database -> "
-             "listening models for the 16 violin string x dynamic pairs -> the first violin of "
-             f"K. 421, measures {DEMO_MEASURES[0]}-{DEMO_MEASURES[1]}, played four ways with "
-             f"{DEMO_SEEDS} seeds. Full report with audio and bowing plots: "
-             "`report/index.html`.", "", f"**{results['verdict']}**", "",
+             "listening models for the 16 string x dynamic pairs of violin, viola and cello "
+             f"(all four parts of K. 421 played with feedback control: `{stem}-feedback.wav`) "
+             f"-> the first violin of K. 421, measures {DEMO_MEASURES[0]}-{DEMO_MEASURES[1]}, "
+             f"played four ways with {DEMO_SEEDS} seeds. Full report with audio and bowing "
+             "plots: `report/index.html`.", "", f"**{results['verdict']}**", "",
              *interval_table(results), "",
              "Steps: " + ", ".join(f"{name} {sec:.0f} s" for name, sec in timings), ""]
     return lines
