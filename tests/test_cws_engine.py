@@ -102,3 +102,16 @@ def test_clear_errors(db):
     with pytest.raises(ParameterError, match="cws"):
         get_engine("cws", "violin", audio_db=db, attack_seconds=1.0)
 
+
+
+def test_a_double_stop_plays_its_top_note_as_one_note():
+    """One row per string at each time (how the rules write a double stop): one note, the
+    upper string's pitch, not notes of one control period alternating between strings."""
+    from synth.cws.notes import action_notes
+
+    low, high = phrase([0], note_s=1.0, string=1), phrase([4], note_s=1.0, string=2)
+    both = pd.concat([low, high]).sort_values("time", kind="stable")
+    notes = action_notes(both)
+    assert len(notes) == 1
+    assert notes["string"].iloc[0] == 2
+    assert notes["midi_pitch"].iloc[0] == pytest.approx(69 + 4, abs=0.01)

@@ -1,7 +1,9 @@
 """Notes of an actions table, for engines that play whole notes.
 
-Rows are walked in time order (monophonic: one bowed note at a time, double stops become
-alternating notes). A new note starts where the string changes, the stopped pitch moves by
+Rows are walked in time order, monophonic: where several strings are bowed at one time (a
+double stop or chord, one row per string), only the highest-sounding string's row is kept,
+so a chord plays its top note (its other rows would otherwise alternate with it row by row
+and cut it into notes of one control period). A new note starts where the string changes, the stopped pitch moves by
 more than half a semitone from the note's first row (vibrato stays inside), the bow
 reverses, the bow stops (|velocity| below :data:`STILL_MPS`) and moves again, or the rows
 leave a gap longer than :data:`MAX_GAP_S`. Rows without bow force, and plucks, play nothing.
@@ -55,6 +57,15 @@ def _boundaries(a: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     return new, change
 
 
+def _top_voice(a: pd.DataFrame, open_midi: np.ndarray) -> pd.DataFrame:
+    """The rows in time order, one per time: the highest-sounding bowed string's."""
+    pitch = open_midi[a["string"].to_numpy(np.int64)] + semitones_of(
+        a["finger_ratio"].to_numpy(np.float64))
+    a = a.assign(_pitch=pitch).sort_values(["time", "_pitch"], ascending=[True, False],
+                                          kind="stable")
+    return a.drop_duplicates("time").drop(columns="_pitch").reset_index(drop=True)
+
+
 def action_notes(actions: pd.DataFrame, instrument: str = "violin") -> pd.DataFrame:
     """Segment an actions table into notes.
 
@@ -83,14 +94,14 @@ def action_notes(actions: pd.DataFrame, instrument: str = "violin") -> pd.DataFr
     >>> n[["start_s", "midi_pitch", "bow_change"]].round(2).values.tolist()
     [[0.0, 69.0, True], [0.5, 70.82, False], [0.7, 70.82, True]]
     """
-    a = actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)]
-    a = a.sort_values("time", kind="stable").reset_index(drop=True)
+    open_midi = np.asarray(instrument_facts(instrument).open_strings, np.float64)
+    a = _top_voice(actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)],
+                   open_midi)
     if a.empty:
         return pd.DataFrame({c: [] for c in NOTE_COLUMNS})
     new, change = _boundaries(a)
     note_id = np.cumsum(new) - 1
     t = a["time"].to_numpy(np.float64)
-    open_midi = np.asarray(instrument_facts(instrument).open_strings, np.float64)
     rows = []
     for k in range(note_id[-1] + 1):
         idx = np.flatnonzero(note_id == k)
