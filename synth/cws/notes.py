@@ -3,10 +3,11 @@
 Rows are walked in time order, monophonic: where several strings are bowed at one time (a
 double stop or chord, one row per string), only the highest-sounding string's row is kept,
 so a chord plays its top note (its other rows would otherwise alternate with it row by row
-and cut it into notes of one control period). A new note starts where the string changes, the stopped pitch moves by
-more than half a semitone from the note's first row (vibrato stays inside), the bow
-reverses, the bow stops (|velocity| below :data:`STILL_MPS`) and moves again, or the rows
-leave a gap longer than :data:`MAX_GAP_S`. Rows without bow force, and plucks, play nothing.
+and cut it into notes of one control period). A new note starts where the string changes,
+the stopped pitch moves by more than half a semitone from the note's first row (vibrato
+stays inside), the bow reverses, the bow stops (|velocity| below :data:`STILL_MPS`) and
+moves again, or the rows leave a gap longer than :data:`MAX_GAP_S`. Rows without bow
+force, and plucks, play nothing.
 A note starts with a **bow change** (its attack is replayed) when it is the first, the bow
 reversed or stopped, or a gap or bow-off came before it; otherwise (a string crossing or a
 new finger within one bow: a slur) it is joined legato.
