@@ -2,7 +2,10 @@
 
 The facts live in ``data_schemas/config/limits.toml``: the length of a performance and
 its note count (raised with ``--max-duration`` and ``--max-notes``), the tempo range of
-score readers and the length of a recorded take.
+score readers and the length of a recorded take. Any of them can be raised (or lowered)
+for every command at once by a TOML file of the same shape named by the environment
+variable ``ARCO_LIMITS`` (its values are merged over the shipped ones and checked: positive,
+finite numbers under known keys).
 
 Examples
 --------
@@ -18,6 +21,7 @@ data_schemas.errors.ParameterError: long.csv: the performance lasts 1e+09 s, ove
 from __future__ import annotations
 
 import math
+import os
 import tomllib
 from dataclasses import dataclass
 from functools import cache
@@ -52,16 +56,47 @@ class Limits:
     max_take_gap: float
 
 
+#: Environment variable naming a TOML file merged over ``limits.toml``.
+LIMITS_ENV = "ARCO_LIMITS"
+
+
+def _merged(raw: dict, path: str) -> dict:
+    """``raw`` with the override file's values (same tables and keys) merged over it."""
+    try:
+        with open(path, "rb") as fh:
+            extra = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"{LIMITS_ENV}={path}: cannot read it ({exc})") from None
+    for table, values in extra.items():
+        if table not in raw or not isinstance(values, dict):
+            raise ParameterError(f"{path}: unknown table [{table}] (known: {sorted(raw)})")
+        for key, value in values.items():
+            ok = isinstance(value, int | float) and not isinstance(value, bool) \
+                and math.isfinite(value) and value > 0
+            if key not in raw[table] or not ok:
+                raise ParameterError(f"{path}: [{table}] {key} = {value!r}: expected a "
+                                     f"positive number under {sorted(raw[table])}")
+            raw[table][key] = value
+    return raw
+
+
 @cache
 def load_limits() -> Limits:
-    """Read ``data_schemas/config/limits.toml`` (once).
+    """Read ``data_schemas/config/limits.toml`` (once), and ``$ARCO_LIMITS`` over it.
 
     Returns
     -------
     Limits
+
+    Raises
+    ------
+    ParameterError
+        The ``ARCO_LIMITS`` file cannot be read or holds an unknown key or a bad value.
     """
     text = resources.files("data_schemas").joinpath("config/limits.toml").read_text("utf-8")
     raw = tomllib.loads(text)
+    if os.environ.get(LIMITS_ENV):
+        raw = _merged(raw, os.environ[LIMITS_ENV])
     perf, tempo, rec = raw["performance"], raw["tempo"], raw["recordings"]
     return Limits(max_duration=float(perf["max_duration"]), max_notes=int(perf["max_notes"]),
                   min_bpm=float(tempo["min_bpm"]), max_bpm=float(tempo["max_bpm"]),

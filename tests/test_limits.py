@@ -6,6 +6,7 @@ Each runs the real ``arco`` command under a 30 s alarm: a hang or a MemoryError 
 from __future__ import annotations
 
 import signal
+import subprocess
 
 import mido
 import numpy as np
@@ -159,3 +160,36 @@ def test_build_db_empty_actions_table_names_the_file(tmp_path, capsys):
     err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
     assert f"{path}: the actions table is empty" in err
     assert not (tmp_path / "db").exists()
+
+
+def _limits_in_fresh_process(env_file) -> subprocess.CompletedProcess:
+    import os
+    import sys
+
+    env = {**os.environ, "ARCO_LIMITS": str(env_file)}
+    code = ("from data_schemas.limits import LIMITS; "
+            "print(LIMITS.max_take_duration, LIMITS.min_bpm, LIMITS.max_duration)")
+    return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                          text=True, timeout=60)
+
+
+def test_arco_limits_raises_a_limit_for_every_command(tmp_path):
+    """A TOML named by ARCO_LIMITS is merged over the shipped limits (others unchanged)."""
+    f = tmp_path / "limits.toml"
+    f.write_text("[recordings]\nmax_take_duration = 7200\n[tempo]\nmin_bpm = 2\n")
+    run = _limits_in_fresh_process(f)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split() == ["7200.0", "2.0", str(LIMITS.max_duration)]
+
+
+@pytest.mark.parametrize("text, words", [
+    ("[recordings]\nmax_take_length = 5\n", "max_take_length"),
+    ("[tempo]\nmin_bpm = -1\n", "min_bpm = -1"),
+    ("[nowhere]\nx = 1\n", "[nowhere]"),
+    ("[tempo\n", "cannot read"),
+])
+def test_a_bad_arco_limits_file_is_named(tmp_path, text, words):
+    f = tmp_path / "limits.toml"
+    f.write_text(text)
+    run = _limits_in_fresh_process(f)
+    assert run.returncode != 0 and str(f) in run.stderr and words in run.stderr
