@@ -35,27 +35,38 @@ def _directions(v: np.ndarray) -> np.ndarray:
     return sign.bfill().ffill().fillna(1.0).to_numpy()
 
 
-def _boundaries(a: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    """Per row: does a new note start here, and is it a bow change."""
+def _boundaries(a: pd.DataFrame, stopped: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per (moving) row: does a new note start here, and is it a bow change.
+
+    ``stopped`` marks rows that follow rows where the bow stood still.
+    """
     string = a["string"].to_numpy()
     pitch = semitones_of(a["finger_ratio"].to_numpy(np.float64))
-    v = a["bow_velocity"].to_numpy(np.float64)
     t = a["time"].to_numpy(np.float64)
-    direction = _directions(v)
-    still = np.abs(v) < STILL_MPS
+    direction = np.sign(a["bow_velocity"].to_numpy(np.float64))
     new = np.zeros(len(a), bool)
     change = np.zeros(len(a), bool)
-    start_pitch, moved = None, False
+    start_pitch = None
     for i in range(len(a)):
         gap = i == 0 or t[i] - t[i - 1] > MAX_GAP_S
-        rebow = i > 0 and (direction[i] != direction[i - 1] or (moved and still[i - 1]
-                                                                 and not still[i]))
+        rebow = i > 0 and (direction[i] != direction[i - 1] or stopped[i])
         other = i > 0 and (string[i] != string[i - 1] or abs(pitch[i] - start_pitch) > 0.5)
         if gap or rebow or other:
             new[i], change[i] = True, gap or rebow
-            start_pitch, moved = pitch[i], False
-        moved = moved or not still[i]
+            start_pitch = pitch[i]
     return new, change
+
+
+def _moving(a: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
+    """The rows where the bow moves, and per row whether the bow stood still just before.
+
+    A bow at rest (a reversal's turning point, a stop between strokes) plays nothing of its
+    own: its rows belong to no note, so the stroke after it starts the note (and replays
+    the attack) instead of a note of a few still milliseconds.
+    """
+    still = np.abs(a["bow_velocity"].to_numpy(np.float64)) < STILL_MPS
+    stopped = np.concatenate([[False], still[:-1]]) & ~still
+    return a[~still].reset_index(drop=True), stopped[~still]
 
 
 def _top_voice(a: pd.DataFrame, open_midi: np.ndarray) -> pd.DataFrame:
@@ -100,7 +111,10 @@ def action_notes(actions: pd.DataFrame, instrument: str = "violin") -> pd.DataFr
                    open_midi)
     if a.empty:
         return pd.DataFrame({c: [] for c in NOTE_COLUMNS})
-    new, change = _boundaries(a)
+    a, stopped = _moving(a)
+    if a.empty:
+        return pd.DataFrame({c: [] for c in NOTE_COLUMNS})
+    new, change = _boundaries(a, stopped)
     note_id = np.cumsum(new) - 1
     t = a["time"].to_numpy(np.float64)
     rows = []
