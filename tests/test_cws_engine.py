@@ -115,3 +115,15 @@ def test_a_double_stop_plays_its_top_note_as_one_note():
     assert len(notes) == 1
     assert notes["string"].iloc[0] == 2
     assert notes["midi_pitch"].iloc[0] == pytest.approx(69 + 4, abs=0.01)
+
+
+def test_the_lower_string_of_a_double_stop_is_a_second_voice():
+    from synth.cws.notes import action_notes, voices
+
+    low, high = phrase([0], note_s=1.0, string=1), phrase([4], note_s=1.0, string=2)
+    both = pd.concat([low, high]).sort_values("time", kind="stable")
+    assert voices(both) == 2 and voices(high) == 1
+    lower = action_notes(both, voice=1)
+    assert len(lower) == 1 and lower["string"].iloc[0] == 1
+    assert lower["midi_pitch"].iloc[0] == pytest.approx(62, abs=0.01)
+    assert action_notes(high, voice=1).empty

@@ -125,13 +125,16 @@ class CwsEngine:
                diagnostics: bool = False) -> tuple[np.ndarray, None]:
         """Play a whole actions table; float32 mono audio and no diagnostics.
 
+        Each string of a double stop or chord is its own voice (:func:`synth.cws.notes.
+        action_notes` with ``voice``), synthesized alone and mixed.
+
         Raises
         ------
         ParameterError
             Diagnostics asked for (this engine has none).
         """
         from data_schemas.actions import validate_actions
-        from synth.cws.notes import action_notes
+        from synth.cws.notes import action_notes, voices
         from synth.cws.synthesis import render_notes
 
         if diagnostics:
@@ -139,9 +142,12 @@ class CwsEngine:
         actions = validate_actions(actions)
         end = float(actions["time"].max()) if len(actions) else 0.0
         n = int(round((end + tail) * self.sample_rate))
-        notes = action_notes(actions, self.name)
-        audio = render_notes(self.model, notes, n, self.sample_rate, seed=self.seed,
-                             settings=self.settings, progress=progress)
+        audio = np.zeros(n)
+        for voice in range(max(voices(actions), 1)):  # each string of a chord, mixed
+            notes = action_notes(actions, self.name, voice=voice)
+            audio += render_notes(self.model, notes, n, self.sample_rate,
+                                  seed=self.seed + voice, settings=self.settings,
+                                  progress=progress and voice == 0)
         return audio.astype(np.float32), None
 
 

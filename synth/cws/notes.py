@@ -1,9 +1,9 @@
 """Notes of an actions table, for engines that play whole notes.
 
-Rows are walked in time order, monophonic: where several strings are bowed at one time (a
-double stop or chord, one row per string), only the highest-sounding string's row is kept,
-so a chord plays its top note (its other rows would otherwise alternate with it row by row
-and cut it into notes of one control period). A new note starts where the string changes,
+Rows are walked in time order, one voice at a time: where several strings are bowed at once
+(a double stop or chord, one row per string), voice 0 keeps the highest-sounding string's
+row, voice 1 the next one's, and so on (mixed, they would alternate row by row and cut the
+notes into pieces of one control period). A new note starts where the string changes,
 the stopped pitch moves by more than half a semitone from the note's first row (vibrato
 stays inside), the bow reverses, the bow stops (|velocity| below :data:`STILL_MPS`) and
 moves again, or the rows leave a gap longer than :data:`MAX_GAP_S`. Rows without bow
@@ -69,16 +69,27 @@ def _moving(a: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
     return a[~still].reset_index(drop=True), stopped[~still]
 
 
-def _top_voice(a: pd.DataFrame, open_midi: np.ndarray) -> pd.DataFrame:
-    """The rows in time order, one per time: the highest-sounding bowed string's."""
+def voices(actions: pd.DataFrame) -> int:
+    """Most strings bowed at one time in ``actions`` (0 when nothing is bowed)."""
+    bowed = actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)]
+    return int(bowed.groupby("time").size().max()) if len(bowed) else 0
+
+
+def _voice(a: pd.DataFrame, open_midi: np.ndarray, voice: int) -> pd.DataFrame:
+    """One row per time, the ``voice``-th highest-sounding string's (0: the top one).
+
+    Times where fewer strings are bowed have no row.
+    """
     pitch = open_midi[a["string"].to_numpy(np.int64)] + semitones_of(
         a["finger_ratio"].to_numpy(np.float64))
     a = a.assign(_pitch=pitch).sort_values(["time", "_pitch"], ascending=[True, False],
                                           kind="stable")
-    return a.drop_duplicates("time").drop(columns="_pitch").reset_index(drop=True)
+    rank = a.groupby("time", sort=False).cumcount().to_numpy()
+    return a[rank == voice].drop(columns="_pitch").reset_index(drop=True)
 
 
-def action_notes(actions: pd.DataFrame, instrument: str = "violin") -> pd.DataFrame:
+def action_notes(actions: pd.DataFrame, instrument: str = "violin", *,
+                 voice: int = 0) -> pd.DataFrame:
     """Segment an actions table into notes.
 
     Parameters
@@ -87,6 +98,9 @@ def action_notes(actions: pd.DataFrame, instrument: str = "violin") -> pd.DataFr
         An actions table (:data:`data_schemas.ACTIONS`).
     instrument : {"violin", "viola", "cello"}
         Whose open strings give the pitch.
+    voice : int
+        Which string of a double stop or chord: 0 the highest-sounding, 1 the next (its
+        notes exist only where two or more strings are bowed at once), and so on.
 
     Returns
     -------
@@ -107,8 +121,8 @@ def action_notes(actions: pd.DataFrame, instrument: str = "violin") -> pd.DataFr
     [[0.0, 69.0, True], [0.5, 70.82, False], [0.7, 70.82, True]]
     """
     open_midi = np.asarray(instrument_facts(instrument).open_strings, np.float64)
-    a = _top_voice(actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)],
-                   open_midi)
+    a = _voice(actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)],
+               open_midi, voice)
     if a.empty:
         return pd.DataFrame({c: [] for c in NOTE_COLUMNS})
     a, stopped = _moving(a)
@@ -134,4 +148,4 @@ def action_notes(actions: pd.DataFrame, instrument: str = "violin") -> pd.DataFr
     return pd.DataFrame(rows, columns=list(NOTE_COLUMNS))
 
 
-__all__ = ["MAX_GAP_S", "STILL_MPS", "action_notes"]
+__all__ = ["MAX_GAP_S", "STILL_MPS", "action_notes", "voices"]
