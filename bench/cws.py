@@ -64,7 +64,7 @@ def say(*parts: Any) -> None:
 
 def shared_folder() -> Path:
     """The shared bach-violin folder (as ``arco compare --engines`` finds it)."""
-    return shared_recordings_folder(ROOT)
+    return shared_recordings_folder()
 
 
 def monophonic(table: pd.DataFrame) -> pd.DataFrame:

@@ -36,11 +36,13 @@ def say(*parts) -> None:
 
 
 def dataset() -> Path:
-    for c in (os.environ.get("ARCO_SHARED_DATA"), ROOT.parent / "shared" / "data",
-              "/work/shared/data"):
-        if c and (Path(c) / "bach-violin" / "audio").is_dir():
-            return Path(c) / "bach-violin"
-    raise SystemExit("bench/engines.py: bach-violin data not found (set ARCO_SHARED_DATA)")
+    from data_schemas.errors import ArcoError
+    from pipelines.shared_data import shared_data_dir
+
+    try:
+        return shared_data_dir("bach-violin") / "bach-violin"
+    except ArcoError as exc:
+        raise SystemExit(f"bench/engines.py: {exc}") from None
 
 
 def long_score(n_notes: int, seed: int) -> pd.DataFrame:

@@ -34,11 +34,13 @@ from pipelines.score.musicxml import notes_from_music21, parse_musicxml  # noqa:
 
 
 def shared_data() -> Path:
-    for c in (os.environ.get("ARCO_SHARED_DATA"), ROOT.parent / "shared" / "data",
-              "/work/shared/data"):
-        if c and (Path(c) / "openscore-quartets").is_dir():
-            return Path(c)
-    raise SystemExit("shared data not found: set ARCO_SHARED_DATA")
+    from data_schemas.errors import ArcoError
+    from pipelines.shared_data import shared_data_dir
+
+    try:
+        return shared_data_dir("openscore-quartets")
+    except ArcoError as exc:
+        raise SystemExit(str(exc)) from None
 
 
 def first_movement(notes):

@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import tempfile
 import time
@@ -68,12 +67,9 @@ def say(*parts: Any) -> None:
 
 
 def shared_recordings() -> list[recordings.Recording]:
-    for c in (os.environ.get("ARCO_SHARED_DATA"), ROOT.parent / "shared" / "data",
-              "/work/shared/data"):
-        if c and (Path(c) / "bach-violin" / "notes").is_dir():
-            return recordings.dataset_recordings(Path(c) / "bach-violin")
-    raise ParameterError("bach-violin data not found: set ARCO_SHARED_DATA or give "
-                         "--recording AUDIO NOTES ALIGNMENT")
+    from pipelines.reports.leave_out import shared_recordings_folder
+
+    return recordings.dataset_recordings(shared_recordings_folder())
 
 
 def given_recordings(triples: list[list[str]]) -> list[recordings.Recording]:

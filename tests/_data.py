@@ -6,7 +6,6 @@ directory fails the calling test with that message.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
@@ -14,11 +13,10 @@ import pytest
 
 def shared_data() -> Path:
     """The shared data directory (holding ``openscore-quartets/`` and ``bach-violin/``)."""
-    candidates = [os.environ.get("ARCO_SHARED_DATA"),
-                  Path(__file__).resolve().parents[1].parent / "shared" / "data",
-                  "/work/shared/data"]
-    for c in candidates:
-        if c and (Path(c) / "openscore-quartets").is_dir():
-            return Path(c)
-    pytest.fail("shared data not found: set ARCO_SHARED_DATA to the directory holding "
-                f"openscore-quartets/ (tried {[str(c) for c in candidates if c]})")
+    from data_schemas.errors import ParameterError
+    from pipelines.shared_data import shared_data_dir
+
+    try:
+        return shared_data_dir("openscore-quartets")
+    except ParameterError as exc:
+        pytest.fail(str(exc))

@@ -20,11 +20,11 @@ def test_demo_writes_audio_plots_and_report(tmp_path):
 
 
 def test_demo_says_when_the_held_out_protocol_cannot_run(tmp_path, monkeypatch, capsys):
-    import pipelines.reports.heldout as heldout
+    import pipelines.shared_data as shared
     from pipelines.cli.commands.demo import heldout_story
 
-    monkeypatch.setenv("ARCO_SHARED_DATA", str(tmp_path / "none"))
-    monkeypatch.setattr(heldout, "__file__", str(tmp_path / "a" / "b" / "c" / "heldout.py"))
+
+    monkeypatch.setattr(shared, "candidates", lambda: [tmp_path / "none"])
     lines = heldout_story(tmp_path, workers=1)
     assert lines[0] == "## The held-out protocol (quick run)"
     assert any(line.startswith("Not run: shared data not found") for line in lines)

@@ -100,11 +100,11 @@ def test_missing_shared_data_and_missing_files_are_clear_errors(tmp_path, monkey
 
 
 def test_arco_compare_heldout_without_shared_data_is_one_line(tmp_path, monkeypatch, capsys):
-    import pipelines.reports.heldout as heldout
+    import pipelines.shared_data as shared
     from pipelines.cli.main import main
 
-    monkeypatch.setenv("ARCO_SHARED_DATA", str(tmp_path / "none"))
-    monkeypatch.setattr(heldout, "__file__", str(tmp_path / "a" / "b" / "c" / "heldout.py"))
+
+    monkeypatch.setattr(shared, "candidates", lambda: [tmp_path / "none"])
     assert main(["compare", "--heldout", "--methods", "rules", "-o", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("arco compare: error: shared data not found") and "\n" not in err

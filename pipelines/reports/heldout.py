@@ -160,23 +160,16 @@ def load_protocol(path: str | os.PathLike | None = None) -> Protocol:
 
 
 def shared_data_dir() -> Path:
-    """The shared data folder: ``$ARCO_SHARED_DATA``, else ``../shared/data`` by the repo.
+    """The shared data folder holding ``openscore-quartets/`` (see :mod:`pipelines.shared_data`).
 
     Raises
     ------
     ParameterError
-        Neither holds ``openscore-quartets/`` (the message names both places).
+        No candidate holds it (the message names every place tried).
     """
-    repo = Path(__file__).resolve().parents[2]
-    env = os.environ.get("ARCO_SHARED_DATA")
-    candidates = [Path(env)] if env else []
-    candidates.append(repo.parent / "shared" / "data")
-    for c in candidates:
-        if (c / FOLDER).is_dir():
-            return c
-    raise ParameterError(f"shared data not found: no {FOLDER}/ in "
-                         f"{' or '.join(str(c) for c in candidates)} (set ARCO_SHARED_DATA "
-                         f"to the folder holding {FOLDER}/)")
+    from pipelines.shared_data import shared_data_dir as find
+
+    return find(FOLDER)
 
 
 def resolve(protocol: Protocol, data_dir: str | os.PathLike | None = None) -> list[Path]:

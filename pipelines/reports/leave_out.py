@@ -86,27 +86,20 @@ def without(db: Any, recording: str, root: str | os.PathLike | None = None) -> A
     return dataclasses.replace(db, **changes)
 
 
-def shared_recordings_folder(repo: str | os.PathLike) -> Path:
-    """The shared bach-violin folder.
-
-    ``$ARCO_SHARED_DATA/bach-violin``, else ``../shared/data/bach-violin`` next to ``repo``.
+def shared_recordings_folder() -> Path:
+    """The shared ``bach-violin`` folder (:func:`pipelines.shared_data.shared_data_dir`).
 
     Raises
     ------
     ParameterError
-        Neither holds a ``notes/`` folder.
+        No candidate holds it.
     """
-    tried = []
-    for base in (os.environ.get("ARCO_SHARED_DATA"), Path(repo).resolve().parent / "shared"
-                 / "data"):
-        if not base:
-            continue
-        folder = Path(base) / "bach-violin"
-        tried.append(str(folder))
-        if (folder / "notes").is_dir():
-            return folder
-    raise ParameterError(f"bach-violin recordings not found (tried {', '.join(tried)}): set "
-                         "ARCO_SHARED_DATA or give --recordings DIR")
+    from pipelines.shared_data import shared_data_dir
+
+    try:
+        return shared_data_dir("bach-violin") / "bach-violin"
+    except ParameterError as exc:
+        raise ParameterError(f"{exc}; or give --recordings DIR") from None
 
 
 __all__ = ["shared_recordings_folder", "without"]

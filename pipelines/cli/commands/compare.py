@@ -80,8 +80,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run_engines(args: argparse.Namespace, say) -> int:
     """``--engines``: engines against real recordings, one left out at a time."""
-    from pathlib import Path
-
     from data_schemas.errors import ParameterError
     from pipelines.reports.engine_compare import check_engines, compare_engines
     from pipelines.reports.leave_out import shared_recordings_folder
@@ -89,7 +87,7 @@ def run_engines(args: argparse.Namespace, say) -> int:
     if args.scores or args.heldout is not None:
         raise ParameterError("--engines plays recordings: give no SCORE and no --heldout")
     engines = check_engines(args.engines.split(","), args.audio_db)
-    folder = args.recordings or shared_recordings_folder(Path(__file__).resolve().parents[3])
+    folder = args.recordings or shared_recordings_folder()
     seed = args.seeds[0] if isinstance(args.seeds, list) else 0
     with removed_on_failure(args.output):
         results = compare_engines(engines, folder, args.output, audio_db=args.audio_db,
