@@ -26,7 +26,9 @@ from data_schemas.io import atomic_path
 from data_schemas.paths import inside
 from data_schemas.spec import Column, TableSpec
 
-GESTURE_DB_VERSION = "1.0"
+#: 1.1 adds the notes' ``instrument`` (a 1.0 database reads as violin) and the
+#: ``quality`` table of class histograms from practice renders.
+GESTURE_DB_VERSION = "1.1"
 
 _LIST = pa.list_(pa.float64())
 
@@ -67,6 +69,9 @@ DB_NOTES = TableSpec(
         Column("fit_rms_force", pa.float64(), "N", "RMS error of the Bezier force.",
                minimum=0.0),
         Column("fit_rms_beta", pa.float64(), "1", "RMS error of the Bezier beta.", minimum=0.0),
+        Column("instrument", pa.string(), "",
+               "Instrument played: violin, viola or cello (absent in 1.0 databases: violin).",
+               required=False),
         Column("true_onset", pa.float64(), "s", "Ground-truth onset when known.",
                nullable=True, required=False),
         Column("true_offset", pa.float64(), "s", "Ground-truth offset when known.",

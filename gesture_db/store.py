@@ -109,13 +109,25 @@ class GestureDB:
         return sorted(self.manifest["files"]["notes"])
 
     def notes(self, group: str | None = None) -> pd.DataFrame:
-        """Notes (all groups, or one), sorted by ``note_id``."""
+        """Notes (all groups, or one), sorted by ``note_id``.
+
+        A note without an ``instrument`` (a schema 1.0 database) was played on a violin.
+        """
         files = self.manifest["files"]["notes"]
         names = [group] if group else sorted(files)
         parts = [read_frame(self.path / files[g], DB_NOTES) for g in names if g in files]
         if not parts:
             return DB_NOTES.schema.empty_table().to_pandas()
-        return pd.concat(parts, ignore_index=True).sort_values("note_id", ignore_index=True)
+        notes = pd.concat(parts, ignore_index=True).sort_values("note_id", ignore_index=True)
+        if "instrument" not in notes:
+            notes["instrument"] = "violin"
+        notes["instrument"] = notes["instrument"].fillna("violin")
+        return notes
+
+    @property
+    def instruments(self) -> list[str]:
+        """Instruments whose notes the database holds."""
+        return sorted(self.notes()["instrument"].astype(str).unique())
 
     def contours(self, group: str) -> pd.DataFrame:
         """Contour frames of one group."""
