@@ -94,9 +94,10 @@ class Grammar:
         return sum(4 * self.n_segments(p) + 1 for p in CONTOUR_PARAMS)
 
     def value_mask(self) -> np.ndarray:
-        """Which entries of the contour vector are segment end values (the rest: duration
-        shares and handle ratios), in the layout ``shares (n), values (n + 1), handles (2n)``
-        per parameter.
+        """Which entries of the contour vector are segment end values.
+
+        The rest are duration shares and handle ratios; the layout per parameter is
+        ``shares (n), values (n + 1), handles (2n)``.
 
         Examples
         --------

@@ -55,7 +55,8 @@ def recording_script(n_notes: int, rng: np.random.Generator,
     Returns
     -------
     pandas.DataFrame
-        One row per note: ``instrument``, ``exercise``, ``run``, ``onset`` (nominal, s), ``duration`` (s),
+        One row per note: ``instrument``, ``exercise``, ``run``,
+        ``onset`` (nominal, s), ``duration`` (s),
         ``rest_after`` (s), ``midi_pitch``, ``string``, ``finger_ratio``, ``dynamic``,
         ``technique``, ``slur_position``, ``run_position``, ``tempo_bpm``.
     """

@@ -66,16 +66,8 @@ def simulate_recordings(n_notes: int, n_performers: int, out_dir: str | Path, *,
     list of pathlib.Path
         The recording files written.
     """
-    if n_notes < 1 or n_performers < 1 or notes_per_take < 1:
-        raise ParameterError(f"n_notes={n_notes}, n_performers={n_performers} and "
-                             f"notes_per_take={notes_per_take} must be >= 1")
-    if not 200.0 <= frame_rate <= 240.0:
-        raise ParameterError(f"frame_rate={frame_rate} Hz is outside 200-240 Hz")
-    check_instrument(instrument, "simulate_recordings")
-    factors = None if force_factors is None else np.asarray(force_factors, float)
-    if factors is not None and (factors.shape != (4,) or not np.all(np.isfinite(factors))
-                                or np.any(factors <= 0)):
-        raise ParameterError(f"force_factors={force_factors} must be 4 positive numbers")
+    factors = _check(n_notes, n_performers, notes_per_take, frame_rate, instrument,
+                     force_factors)
     rng = np.random.default_rng(seed)
     bases = PERFORMERS if performers is None else tuple(performers)
     if not bases:
@@ -111,6 +103,22 @@ def simulate_recordings(n_notes: int, n_performers: int, out_dir: str | Path, *,
         write_recording(recording, path, instrument=instrument)
         paths.append(path)
     return paths
+
+
+def _check(n_notes: int, n_performers: int, notes_per_take: int, frame_rate: float,
+           instrument: str, force_factors: Sequence[float] | None) -> np.ndarray | None:
+    """Refuse bad arguments of :func:`simulate_recordings`; the force factors as an array."""
+    if n_notes < 1 or n_performers < 1 or notes_per_take < 1:
+        raise ParameterError(f"n_notes={n_notes}, n_performers={n_performers} and "
+                             f"notes_per_take={notes_per_take} must be >= 1")
+    if not 200.0 <= frame_rate <= 240.0:
+        raise ParameterError(f"frame_rate={frame_rate} Hz is outside 200-240 Hz")
+    check_instrument(instrument, "simulate_recordings")
+    factors = None if force_factors is None else np.asarray(force_factors, float)
+    if factors is not None and (factors.shape != (4,) or not np.all(np.isfinite(factors))
+                                or np.any(factors <= 0)):
+        raise ParameterError(f"force_factors={force_factors} must be 4 positive numbers")
+    return factors
 
 
 __all__ = ["simulate_recordings"]
