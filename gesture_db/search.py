@@ -21,7 +21,7 @@ units of ``continuity_scale``). Weights live in ``gesture_db/config/search.toml`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -204,7 +204,8 @@ class SearchIndex:
         if instrument is not None:
             notes = notes[notes["instrument"] == instrument]
         cost = None if quality is None or not len(quality) else \
-            pd.Series(quality_costs(quality), index=quality["note_id"].to_numpy())
+            pd.Series(quality_costs(quality),
+                      index=quality["note_id"].to_numpy()).groupby(level=0).mean()
         models = db.models().set_index("group")
         groups = {}
         for group, rows in notes.groupby("group", sort=True):
@@ -212,8 +213,9 @@ class SearchIndex:
             gi = build_group_index(rows, str(group), model.feature_mean, model.feature_cov)
             if cost is not None:
                 q = cost.reindex(gi.note_id).to_numpy(np.float64)
-                gi.quality = np.where(np.isfinite(q), q, np.nanmean(q) if np.isfinite(q).any()
-                                      else 0.0)
+                judged = np.isfinite(q)
+                fill = float(q[judged].mean()) if judged.any() else 0.0
+                gi = replace(gi, quality=np.where(judged, q, fill))
             groups[str(group)] = gi
         name = str(db.path) if instrument is None else f"{db.path} ({instrument})"
         return cls(groups, source=name)
