@@ -33,7 +33,7 @@ def _database(tmp: Path, notes: int, instruments: list[str]) -> Path:
     for k, name in enumerate(instruments):
         rec = tmp / f"rec-{name}"
         simulate_recordings(notes, 3, rec, seed=1 + k, instrument=name,
-                            string_forces=string_forces(name))
+                            force_factors=string_forces(name))
         dirs.append(rec)
     build_database(dirs, tmp / "db", workers=1, progress=False)
     return tmp / "db"

@@ -1,4 +1,4 @@
-"""The simulated violinist plays a recording script: bowing signals and ground truth.
+"""The simulated player (violin, viola or cello) plays a script: bowing signals and truth.
 
 :func:`play_script` turns a script (:func:`gesture_db.script.recording_script`) into a
 recording and its annotation, with
@@ -8,7 +8,9 @@ recording and its annotation, with
 - bow changes that reverse the velocity with a realistic acceleration (6-30 m/s^2);
 - bow planning inside the violin's bow hair (runs scaled down to fit the bow-travel budget
   :class:`data_schemas.bow.BowBudget`, retakes in rests with the bow lifted);
-- context effects (slur and run position, tempo, note length) and vibrato;
+- context effects: speed with note length and dynamic, force with dynamic and string (the
+  caller's per-string force factors), a crescendo over each run with sustained notes
+  tilting with it, accents on slur and run starts, the bow slowing before a leap; vibrato;
 - performer styles, trial-to-trial variability, timing deviations and sensor noise.
 
 Every random draw comes from a :class:`numpy.random.Generator`. The exact boundaries played
