@@ -196,7 +196,7 @@ class SearchIndex:
             Index only the notes played on this instrument (default all).
         quality : pandas.DataFrame, optional
             :data:`data_schemas.gesture_db.DB_QUALITY` rows: judged samples get their
-            :func:`quality_costs`, the group's others its judged samples' mean.
+            :func:`quality_costs`, the others the mean cost of the index's judged samples.
         """
         from gesture_db.store import model_from_row
 
@@ -206,6 +206,9 @@ class SearchIndex:
         cost = None if quality is None or not len(quality) else \
             pd.Series(quality_costs(quality),
                       index=quality["note_id"].to_numpy()).groupby(level=0).mean()
+        if cost is not None:
+            own = cost.reindex(notes["note_id"].to_numpy()).to_numpy(np.float64)
+            fill = float(np.mean(own[np.isfinite(own)])) if np.isfinite(own).any() else 0.0
         models = db.models().set_index("group")
         groups = {}
         for group, rows in notes.groupby("group", sort=True):
@@ -213,9 +216,7 @@ class SearchIndex:
             gi = build_group_index(rows, str(group), model.feature_mean, model.feature_cov)
             if cost is not None:
                 q = cost.reindex(gi.note_id).to_numpy(np.float64)
-                judged = np.isfinite(q)
-                fill = float(q[judged].mean()) if judged.any() else 0.0
-                gi = replace(gi, quality=np.where(judged, q, fill))
+                gi = replace(gi, quality=np.where(np.isfinite(q), q, fill))
             groups[str(group)] = gi
         name = str(db.path) if instrument is None else f"{db.path} ({instrument})"
         return cls(groups, source=name)
@@ -441,7 +442,7 @@ def quality_costs(quality: pd.DataFrame) -> np.ndarray:
     Examples
     --------
     >>> q = pd.DataFrame({"class_counts": [[0, 0, 10, 0, 0], [0, 2, 6, 0, 2], [0, 0, 0, 0, 0]]})
-    >>> quality_costs(q).tolist()
+    >>> quality_costs(q).round(3).tolist()
     [0.0, 0.6, 1.0]
     """
     counts = np.vstack(quality["class_counts"].to_numpy()).astype(np.float64)

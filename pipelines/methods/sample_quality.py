@@ -121,7 +121,8 @@ def judge_samples(db_path: str | os.PathLike, *, per_group: int = 4, seed: int =
     db_path : path-like
         Gesture database (``arco build-db``).
     per_group : int
-        Samples judged per (instrument, group); the others of a group get its mean cost.
+        Samples judged per (instrument, group); the others get the mean cost of the
+        instrument's judged samples.
     seed : int
         Seed of the sample choice and of the renders.
     sample_rate : int, Hz

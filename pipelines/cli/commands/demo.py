@@ -38,7 +38,7 @@ DEMO_PERFORMERS = 3
 #: Simulated notes per instrument of the demo's database (quick settings for viola, cello).
 DEMO_INSTRUMENT_NOTES = {"violin": 2000, "viola": 1000, "cello": 1000}
 #: Samples per group and instrument the demo judges by playing them (``arco db judge``).
-DEMO_JUDGED_PER_GROUP = 1
+DEMO_JUDGED_PER_GROUP = 3
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -171,8 +171,8 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
     lines = ["## Gesture sampling against feedback control", "",
              f"{notes} violin, {DEMO_INSTRUMENT_NOTES['viola']} viola and "
              f"{DEMO_INSTRUMENT_NOTES['cello']} cello simulated notes by {performers} "
-             f"performers each -> gesture database ({DEMO_JUDGED_PER_GROUP} sample per group "
-             "and instrument judged by playing it) -> "
+             f"performers each -> gesture database ({DEMO_JUDGED_PER_GROUP} samples per "
+             "group and instrument judged by playing them) -> "
              "listening models for the 16 violin string x dynamic pairs -> the first violin of "
              f"K. 421, measures {DEMO_MEASURES[0]}-{DEMO_MEASURES[1]}, played four ways. "
              "Full report with audio and bowing plots: `report/index.html`.", "",
