@@ -6,7 +6,9 @@ A database directory holds
   source recordings and the list of files that make up the committed generation;
 - ``notes/gen-<g>/group=<group>/part.parquet``: :data:`DB_NOTES`, one row per segmented note;
 - ``contours/group=<group>/src-<hash>.parquet``: :data:`DB_CONTOURS`, the segmented signals;
-- ``models/gen-<g>.parquet``: :data:`DB_GROUP_MODELS`, one row per note group.
+- ``models/gen-<g>.parquet``: :data:`DB_GROUP_MODELS`, one row per note group;
+- optionally ``quality/gen-<g>.parquet``: :data:`DB_QUALITY`, the judged samples' class
+  histograms (``arco db judge``).
 
 Only files listed in the manifest belong to the database; the manifest is replaced
 atomically, so a crashed build leaves the previous generation readable.
@@ -26,7 +28,9 @@ from data_schemas.io import atomic_path
 from data_schemas.paths import inside
 from data_schemas.spec import Column, TableSpec
 
-GESTURE_DB_VERSION = "1.0"
+#: 1.1 adds the notes' ``instrument`` (a 1.0 database reads as violin) and the
+#: ``quality`` table of class histograms from practice renders.
+GESTURE_DB_VERSION = "1.1"
 
 _LIST = pa.list_(pa.float64())
 
@@ -67,6 +71,9 @@ DB_NOTES = TableSpec(
         Column("fit_rms_force", pa.float64(), "N", "RMS error of the Bezier force.",
                minimum=0.0),
         Column("fit_rms_beta", pa.float64(), "1", "RMS error of the Bezier beta.", minimum=0.0),
+        Column("instrument", pa.string(), "",
+               "Instrument played: violin, viola or cello (absent in 1.0 databases: violin).",
+               required=False),
         Column("true_onset", pa.float64(), "s", "Ground-truth onset when known.",
                nullable=True, required=False),
         Column("true_offset", pa.float64(), "s", "Ground-truth offset when known.",
@@ -114,6 +121,26 @@ DB_GROUP_MODELS = TableSpec(
         Column("rms_velocity", pa.float64(), "m/s", "Mean Bezier RMS error of velocity."),
         Column("rms_force", pa.float64(), "N", "Mean Bezier RMS error of force."),
         Column("rms_beta", pa.float64(), "1", "Mean Bezier RMS error of beta."),
+    ),
+)
+
+DB_QUALITY = TableSpec(
+    name="gesture_db_quality",
+    version=GESTURE_DB_VERSION,
+    description="How each judged sample sounds when played: the automatic teacher's class "
+                "histogram of its sustained hops in practice renders on the modal engine "
+                "(quality/gen-<generation>.parquet beside the database).",
+    columns=(
+        Column("note_id", pa.string(), "", "Key of the note in the notes table."),
+        Column("instrument", pa.string(), "", "Instrument model the sample was played on."),
+        Column("class_counts", pa.list_(pa.int32()), "1",
+               "Sustained hops per teacher class 1-5 (5 counts)."),
+        Column("helmholtz_share", pa.float64(), "1",
+               "Share of sustained hops in Helmholtz motion (slip record).", nullable=True,
+               minimum=0.0, maximum=1.0),
+        Column("attack_ms", pa.float64(), "ms", "Time to Helmholtz motion (NaN: never).",
+               nullable=True),
+        Column("seed", pa.int64(), "1", "Seed of the practice render.", minimum=0),
     ),
 )
 
@@ -246,5 +273,5 @@ def _check_shape(manifest: dict[str, Any], source: str) -> None:
         _fail("segmentation", "an object", manifest["segmentation"], source)
 
 
-__all__ = ["DB_CONTOURS", "DB_GROUP_MODELS", "DB_NOTES", "GESTURE_DB_VERSION", "MANIFEST_NAME",
-           "check_manifest_paths", "read_manifest", "write_manifest"]
+__all__ = ["DB_CONTOURS", "DB_GROUP_MODELS", "DB_NOTES", "DB_QUALITY", "GESTURE_DB_VERSION",
+           "MANIFEST_NAME", "check_manifest_paths", "read_manifest", "write_manifest"]

@@ -50,11 +50,19 @@ class BuildParams:
     max_candidates : int
         Candidate boundary frames per parameter in the Bezier dynamic programme.
     reduction : float
-        Target ratio of contour to feature dimensions in the PCA.
+        Target ratio of contour to feature dimensions in the PCA (the most components kept).
+    shape_weight : float
+        Weight of the duration shares and handle ratios of p against its segment values in
+        the PCA: the Bezier fit pins values down well but shares and handles loosely, so at
+        1 the features are mostly fit noise that no context predicts.
+    feature_variance : float
+        Keep the fewest components that explain this share of the (weighted) variance.
     """
 
     max_candidates: int = 24
     reduction: float = 4.5
+    shape_weight: float = 0.2
+    feature_variance: float = 0.8
 
 
 def process_source(source: Source, params: BuildParams,
@@ -309,7 +317,9 @@ def _commit_models(db: Path, sources: dict[str, dict], generation: int, params: 
     for group in tqdm(groups, desc="group models", unit="group", disable=not progress):
         g = notes[notes["group"] == group].copy()
         P = np.vstack(g["params"].to_numpy())
-        model = fit_group_model(P, reduction=params.reduction)
+        weights = np.where(grammar_for(group).value_mask(), 1.0, params.shape_weight)
+        model = fit_group_model(P, reduction=params.reduction, weights=weights,
+                                variance=params.feature_variance)
         F = model.transform(P)
         g["features"] = [f.tolist() for f in F]
         rel = Path("notes") / gen / f"group={group}" / "part.parquet"

@@ -92,6 +92,7 @@ def extract_take(recording: pd.DataFrame, annotation: pd.DataFrame | None, *,
         fit_rms_velocity=[r["bow_velocity"] for r in rms_rows],
         fit_rms_force=[r["bow_force"] for r in rms_rows],
         fit_rms_beta=[r["beta"] for r in rms_rows],
+        instrument=instrument,
         true_onset=_column_or_nan(notes, "true_onset"),
         true_offset=_column_or_nan(notes, "true_offset"),
     ))

@@ -100,7 +100,8 @@ def n_components_for(dim: int, n_samples: int, *, reduction: float = 4.5) -> int
 
 
 def fit_group_model(p: np.ndarray, *, n_components: int | None = None,
-                    reduction: float = 4.5) -> GroupModel:
+                    reduction: float = 4.5, weights: np.ndarray | None = None,
+                    variance: float = 1.0) -> GroupModel:
     """Fit PCA and the regularised Gaussian of one group.
 
     Parameters
@@ -111,10 +112,24 @@ def fit_group_model(p: np.ndarray, *, n_components: int | None = None,
         Number of components; default :func:`n_components_for`.
     reduction : float
         Target ratio d / k when ``n_components`` is not given.
+    weights : np.ndarray [shape=(d,)], optional
+        Weight of each standardised entry of p in the PCA (folded into ``param_scale``:
+        ``std / weight``); default all 1.
+    variance : float
+        Without ``n_components``: keep no more components than explain this share of the
+        variance (at least 2, at most ``d / reduction``); 1 keeps ``d / reduction``.
 
     Returns
     -------
     GroupModel
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> level = rng.normal(size=(50, 1))
+    >>> p = np.hstack([level * [1.0, 2.0, 3.0], 0.01 * rng.normal(size=(50, 6))])
+    >>> fit_group_model(p, variance=0.8).feature_dim
+    2
     """
     p = np.atleast_2d(np.asarray(p, float))
     n, d = p.shape
@@ -122,9 +137,15 @@ def fit_group_model(p: np.ndarray, *, n_components: int | None = None,
         raise ParameterError(f"need finite contour vectors, got shape {p.shape}")
     k = n_components or n_components_for(d, n, reduction=reduction)
     mean = p.mean(axis=0)
-    scale = np.maximum(p.std(axis=0), SCALE_FLOOR)
+    w = np.ones(d) if weights is None else np.asarray(weights, float)
+    if w.shape != (d,) or not np.all(w > 0):
+        raise ParameterError(f"weights must be {d} positive numbers")
+    scale = np.maximum(p.std(axis=0), SCALE_FLOOR) / w
     z = (p - mean) / scale
     _u, s, vt = np.linalg.svd(z, full_matrices=False)
+    if n_components is None and variance < 1.0 and np.sum(s**2) > 0:
+        share = np.cumsum(s**2) / np.sum(s**2)
+        k = int(min(k, max(2, np.searchsorted(share, variance) + 1)))
     comps = np.zeros((k, d))
     m = min(k, vt.shape[0])
     comps[:m] = vt[:m]

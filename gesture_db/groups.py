@@ -93,6 +93,24 @@ class Grammar:
         """Length of the contour vector: per parameter 4 n + 1 numbers."""
         return sum(4 * self.n_segments(p) + 1 for p in CONTOUR_PARAMS)
 
+    def value_mask(self) -> np.ndarray:
+        """Which entries of the contour vector are segment end values.
+
+        The rest are duration shares and handle ratios; the layout per parameter is
+        ``shares (n), values (n + 1), handles (2n)``.
+
+        Examples
+        --------
+        >>> g = Grammar({"bow_velocity": ("f",), "bow_force": ("f",), "beta": ("f",)})
+        >>> g.value_mask().astype(int).tolist()[:5]
+        [0, 1, 1, 0, 0]
+        """
+        out = []
+        for param in CONTOUR_PARAMS:
+            n = self.n_segments(param)
+            out += [False] * n + [True] * (n + 1) + [False] * (2 * n)
+        return np.array(out, bool)
+
     def to_json(self) -> str:
         """Serialise as JSON."""
         return json.dumps({p: list(self.segments[p]) for p in CONTOUR_PARAMS})

@@ -1,4 +1,4 @@
-"""The simulated violinist plays a recording script: bowing signals and ground truth.
+"""The simulated player (violin, viola or cello) plays a script: bowing signals and truth.
 
 :func:`play_script` turns a script (:func:`gesture_db.script.recording_script`) into a
 recording and its annotation, with
@@ -8,7 +8,9 @@ recording and its annotation, with
 - bow changes that reverse the velocity with a realistic acceleration (6-30 m/s^2);
 - bow planning inside the violin's bow hair (runs scaled down to fit the bow-travel budget
   :class:`data_schemas.bow.BowBudget`, retakes in rests with the bow lifted);
-- context effects (slur and run position, tempo, note length) and vibrato;
+- context effects: speed with note length and dynamic, force with dynamic and string (the
+  caller's per-string force factors), a crescendo over each run with sustained notes
+  tilting with it, accents on slur and run starts, the bow slowing before a leap; vibrato;
 - performer styles, trial-to-trial variability, timing deviations and sensor noise.
 
 Every random draw comes from a :class:`numpy.random.Generator`. The exact boundaries played
@@ -28,7 +30,7 @@ import pandas as pd
 from data_schemas.annotation import validate_annotation
 from data_schemas.bow import BowBudget
 from data_schemas.instruments import dynamics_table, finger_ratio, instrument_facts, limits
-from data_schemas.recording import RECORDING_FRAME_RATE, validate_recording
+from data_schemas.recording import RECORDING, RECORDING_FRAME_RATE, validate_recording
 from gesture_db.script import INSTRUMENT
 from gesture_db.simulate_config import Performer, simulator_config
 from gesture_db.strokes import stroke
@@ -37,8 +39,8 @@ Slicer = Callable[[float, float], slice]
 
 
 def play_script(script: pd.DataFrame, performer: Performer, rng: np.random.Generator, *,
-                frame_rate: float = RECORDING_FRAME_RATE,
-                recording_id: str = "take") -> tuple[pd.DataFrame, pd.DataFrame]:
+                frame_rate: float = RECORDING_FRAME_RATE, recording_id: str = "take",
+                force_factors: np.ndarray | None = None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Play a recording script.
 
     Parameters
@@ -55,6 +57,10 @@ def play_script(script: pd.DataFrame, performer: Performer, rng: np.random.Gener
         Frames per second, 200-240 Hz.
     recording_id : str
         Take identifier written to both tables.
+    force_factors : np.ndarray [shape=(4,)], optional
+        Per string, the force the performer uses relative to the violinist's dynamics table
+        (a cello's C string needs several times a violin string's force); default all 1.
+        The instrument is the script's ``instrument`` column (default violin).
 
     Returns
     -------
@@ -63,7 +69,7 @@ def play_script(script: pd.DataFrame, performer: Performer, rng: np.random.Gener
     annotation : pandas.DataFrame
         The :data:`data_schemas.annotation.ANNOTATION` rows with ground truth.
     """
-    plan = _plan_notes(script, performer, rng)
+    plan = _plan_notes(script, performer, rng, force_factors)
     total = float(plan["stop"].max()) + 1.0
     t = np.arange(0.0, total, 1.0 / frame_rate)
     sig = _render(plan, performer, rng, t)
@@ -75,12 +81,18 @@ def play_script(script: pd.DataFrame, performer: Performer, rng: np.random.Gener
     return recording, annotation
 
 
-def _plan_notes(script: pd.DataFrame, perf: Performer, rng: np.random.Generator) -> pd.DataFrame:
+def _plan_notes(script: pd.DataFrame, perf: Performer, rng: np.random.Generator,
+                force_factors: np.ndarray | None = None) -> pd.DataFrame:
     """True timing, bow directions and per-note magnitudes."""
     plan = script.reset_index(drop=True).copy()
+    if "instrument" not in plan:
+        plan["instrument"] = INSTRUMENT
     timing = _timing(plan, perf, rng)
     plan = plan.assign(**timing)
+    plan = plan.assign(**phrase_positions(plan["run"].to_numpy()))
     plan = plan.assign(**_magnitudes(plan, perf, rng))
+    factors = np.ones(4) if force_factors is None else np.asarray(force_factors, float)
+    plan["force"] = plan["force"] * factors[plan["string"].to_numpy(int)]
     # true offsets: the next onset inside a run, the end of bow motion at a run's end
     plan["true_offset"] = np.where(plan["run_end"].to_numpy(), plan["stop"].to_numpy(),
                                    plan["nxt"].to_numpy())
@@ -129,6 +141,43 @@ def _timing(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator) -> di
                 direction=direction, fill=fill, new_stroke=new_stroke)
 
 
+def phrase_positions(run: np.ndarray) -> dict[str, np.ndarray]:
+    """Position of each note in its run (phrase): ``phrase_pos`` in [0, 1], ``run_length``.
+
+    Examples
+    --------
+    >>> out = phrase_positions(np.array([0, 0, 0, 1]))
+    >>> out["phrase_pos"].tolist(), out["run_length"].tolist()
+    ([0.0, 0.5, 1.0, 0.0], [3, 3, 3, 1])
+    """
+    run = np.asarray(run)
+    starts = np.flatnonzero(np.r_[True, run[1:] != run[:-1]])
+    lengths = np.diff(np.r_[starts, run.size])
+    length = np.repeat(lengths, lengths)
+    index = np.arange(run.size) - np.repeat(starts, lengths)
+    return dict(phrase_pos=np.where(length > 1, index / np.maximum(length - 1, 1), 0.0),
+                run_length=length)
+
+
+def _context_factor(plan: pd.DataFrame, perf: Performer) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity and force factors of the context: phrase crescendo, accents, leaps ahead.
+
+    A run (phrase) swells by ``perf.crescendo`` from its first to its last note; the first
+    note of a slur or a run is accented by ``perf.accent`` (force); the bow slows before a
+    leap to the next note (``[magnitudes] leap_slowdown`` per octave).
+    """
+    cfg = simulator_config()["magnitudes"]
+    pos = plan["phrase_pos"].to_numpy()
+    swell = np.where(plan["run_length"].to_numpy() > 1, 1.0 + perf.crescendo * (pos - 0.5), 1.0)
+    starts = (plan["slur_position"].isin(["init"]) | plan["run_position"].isin(["init"]))
+    accent = 1.0 + perf.accent * starts.to_numpy()
+    pitch = plan["midi_pitch"].to_numpy(float)
+    run = plan["run"].to_numpy()
+    leap = np.r_[np.abs(np.diff(pitch)) * (run[1:] == run[:-1]), 0.0]
+    slow = 1.0 - cfg["leap_slowdown"] * np.minimum(leap / 12.0, 1.0)
+    return swell * slow, swell * accent
+
+
 def _magnitudes(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator) -> dict:
     """Velocity, force, beta and bow-change acceleration of every note."""
     cfg = simulator_config()["magnitudes"]
@@ -146,9 +195,10 @@ def _magnitudes(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator) -
     burst = np.where(tech == "staccato", fill * true_dur, true_dur)
     limit = np.where(np.isin(tech, ("staccato", "spiccato")),
                      cfg["burst_acceleration"] * burst / np.pi, np.inf)
-    vel = np.minimum(vel, limit)
+    ctx_v, ctx_f = _context_factor(plan, perf)
+    vel = np.minimum(vel * ctx_v, limit)
     fr = plan["finger_ratio"].to_numpy()
-    force = f * perf.force_scale * np.exp(rng.normal(0, var, n))
+    force = f * perf.force_scale * ctx_f * np.exp(rng.normal(0, var, n))
     slur = plan["slur_position"].to_numpy()
     lean = cfg["slur_force"]
     force *= np.where(slur == "init", lean["init"], np.where(slur == "end", lean["end"], 1.0))
@@ -159,7 +209,10 @@ def _magnitudes(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator) -
                                                                     n)),
                              *cfg["martele_accel_range"]),
                      accel)
-    return dict(vel=vel, force=force, beta=np.clip(beta, *cfg["beta_range"]), accel=accel)
+    tilt = np.where(plan["run_length"].to_numpy() > 1,
+                    perf.crescendo / np.maximum(plan["run_length"].to_numpy() - 1, 1), 0.0)
+    return dict(vel=vel, force=force, beta=np.clip(beta, *cfg["beta_range"]), accel=accel,
+                tilt=tilt)
 
 
 def _slicer(t: np.ndarray) -> Slicer:
@@ -208,7 +261,7 @@ def _plan_bow(plan: pd.DataFrame, v: np.ndarray, force: np.ndarray, sl: Slicer,
     adds the retake's motion to ``v`` where the lifted bow travels far.
     """
     cfg = simulator_config()["bow"]
-    budget = BowBudget(instrument_facts(INSTRUMENT).bow_length)
+    budget = BowBudget(instrument_facts(str(plan["instrument"].iloc[0])).bow_length)
     on = plan["on"].to_numpy()
     stop = plan["stop"].to_numpy()
     run = plan["run"].to_numpy()
@@ -261,7 +314,7 @@ def _left_hand(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator, t:
     tech = plan["technique"].to_numpy()
     n = len(plan)
     on = plan["on"].to_numpy()
-    opens = np.asarray(instrument_facts(INSTRUMENT).open_strings)
+    opens = np.asarray(instrument_facts(str(plan["instrument"].iloc[0])).open_strings)
     semitone = plan["midi_pitch"].to_numpy() - opens[plan["string"]]
     semis = np.zeros(t.size)
     string = np.full(t.size, int(plan["string"].iloc[0]), dtype=np.int8)
@@ -298,7 +351,8 @@ def _add_noise(sig: dict[str, np.ndarray], rng: np.random.Generator) -> dict[str
     n = sig["bow_velocity"].size
     out = dict(sig)
     out["bow_velocity"] = sig["bow_velocity"] + rng.normal(0, cfg["bow_velocity"], n)
-    out["bow_force"] = np.abs(sig["bow_force"] + rng.normal(0, cfg["bow_force"], n))
+    out["bow_force"] = np.minimum(np.abs(sig["bow_force"] + rng.normal(0, cfg["bow_force"], n)),
+                                  RECORDING.column("bow_force").maximum)
     out["beta"] = np.clip(sig["beta"] + rng.normal(0, cfg["beta"], n), *cfg["beta_range"])
     out["bow_position"] = np.clip(sig["bow_position"] + rng.normal(0, cfg["bow_position"], n),
                                   0.0, 1.0)

@@ -40,7 +40,8 @@ PREDICTORS_DIR = "predictors"
 #: Context inputs of the regressors, in column order.
 CONTEXT_COLUMNS = ("log2_duration", "effective_string_length", "string", "dynamic",
                    "prev_log2_ratio", "next_log2_ratio", "prev_interval", "next_interval",
-                   "has_prev", "has_next")
+                   "has_prev", "has_next", "phrase_position", "log2_run_length",
+                   "scale_length")
 #: Regressors available per group (``mean`` predicts the group's mean features).
 CANDIDATES = ("mean", "ridge", "tree", "extra_trees", "gradient_boosting")
 #: Regressors tried by default: gradient boosting (one booster per feature) took ~75 % of
@@ -70,7 +71,18 @@ def context_features(notes: pd.DataFrame, sequence: np.ndarray | None = None) ->
     -------
     np.ndarray [shape=(n, len(CONTEXT_COLUMNS))]
         Neighbours count only inside a run (``run_position`` says whether the note has a
-        predecessor / successor); missing neighbours give ratio and interval 0.
+        predecessor / successor); missing neighbours give ratio and interval 0. The phrase
+        position is the note's place in its run (0 first .. 1 last, 0 alone), the run length
+        its notes; the scale length (m) is the instrument's (an ``instrument`` column;
+        default violin).
+
+    Examples
+    --------
+    >>> notes = pd.DataFrame({"duration": [0.5, 0.5, 0.25], "effective_string_length": 0.3,
+    ...                       "string": 2, "dynamic": 5.0, "midi_pitch": [69, 71, 72],
+    ...                       "run_position": ["init", "mid", "end"]})
+    >>> context_features(notes)[:, [6, 10, 11]].round(3).tolist()
+    [[0.0, 0.0, 1.585], [2.0, 0.5, 1.585], [1.0, 1.0, 1.585]]
     """
     n = len(notes)
     dur = notes["duration"].to_numpy(np.float64)
@@ -86,12 +98,35 @@ def context_features(notes: pd.DataFrame, sequence: np.ndarray | None = None) ->
     prev_int = np.where(has_prev, pitch - np.r_[pitch[:1], pitch[:-1]], 0.0)
     next_int = np.where(has_next, np.r_[pitch[1:], pitch[-1:]] - pitch, 0.0)
     safe = np.maximum(dur, 1e-3)
+    pos, length = _run_places(has_prev)
     return np.column_stack([
         np.log2(safe), notes["effective_string_length"].to_numpy(np.float64),
         notes["string"].to_numpy(np.float64), notes["dynamic"].to_numpy(np.float64),
         np.log2(np.maximum(prev_dur, 1e-3) / safe), np.log2(np.maximum(next_dur, 1e-3) / safe),
         np.clip(prev_int, -12, 12), np.clip(next_int, -12, 12),
-        has_prev.astype(float), has_next.astype(float)])
+        has_prev.astype(float), has_next.astype(float), pos, np.log2(length),
+        _scale_lengths(notes)])
+
+
+def _run_places(has_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Place of each note in its run (0..1) and the run's length, from the links back."""
+    n = has_prev.size
+    starts = np.flatnonzero(~has_prev) if n else np.zeros(0, int)
+    lengths = np.diff(np.r_[starts, n]).astype(float)
+    length = np.repeat(lengths, lengths.astype(int))
+    index = np.arange(n) - np.repeat(starts, lengths.astype(int))
+    return np.where(length > 1, index / np.maximum(length - 1, 1), 0.0), np.maximum(length, 1)
+
+
+def _scale_lengths(notes: pd.DataFrame) -> np.ndarray:
+    """Scale length (m) of each note's instrument (violin without an ``instrument`` column)."""
+    from data_schemas.instruments import instrument_facts
+
+    if "instrument" not in notes:
+        return np.full(len(notes), instrument_facts("violin").scale_length)
+    names = notes["instrument"].fillna("violin").astype(str).to_numpy()
+    table = {k: instrument_facts(k).scale_length for k in np.unique(names)}
+    return np.array([table[k] for k in names], np.float64)
 
 
 def db_context(notes: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
@@ -149,7 +184,7 @@ class GroupPredictor:
         Name of the chosen regressor (one of :data:`CANDIDATES`).
     arrays : dict of str to np.ndarray
         The fitted regressor as arrays (:func:`gesture_db.regressor_arrays.regressor_arrays`):
-        what is stored and what predicts, context (n, 10) -> features (n, k).
+        what is stored and what predicts, context (n, c) -> features (n, k).
     feature_scale : np.ndarray [shape=(k,)]
         Standard deviation of each feature in the group (the PCA-normalised unit).
     mae : float
@@ -172,7 +207,7 @@ class GroupPredictor:
     estimator: Any = None
 
     def predict(self, context: np.ndarray) -> np.ndarray:
-        """Predicted features (n, k) for a context matrix (n, 10)."""
+        """Predicted features (n, k) for a context matrix (n, len(CONTEXT_COLUMNS))."""
         context = np.atleast_2d(np.asarray(context, np.float64))
         out = predict_arrays(self.model, self.arrays, context)
         return out.reshape(len(context), -1)
@@ -336,7 +371,8 @@ def save_predictors(predictors: Predictors, db_path: str | os.PathLike) -> Path:
         p = predictors.groups[group]
         arrays[f"g{i}__feature_scale"] = np.asarray(p.feature_scale, np.float64)
         arrays.update({f"g{i}_{k}": np.asarray(v) for k, v in p.arrays.items()})
-    meta = {**predictors.meta, "format_version": PREDICTORS_VERSION, "array_groups": names}
+    meta = {**predictors.meta, "format_version": PREDICTORS_VERSION, "array_groups": names,
+            "context_columns": list(CONTEXT_COLUMNS)}
     with atomic_path(npz) as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
@@ -377,6 +413,9 @@ def load_predictors(db) -> Predictors:
     if int(meta.get("db_generation", -1)) != generation:
         raise PredictorError(f"{meta_path}: predictors are of generation "
                              f"{meta.get('db_generation')}, the database is at {generation}")
+    if meta.get("context_columns") != list(CONTEXT_COLUMNS):
+        raise PredictorError(f"{meta_path}: predictors read another context "
+                             f"({meta.get('context_columns')}); {refit}")
     return Predictors(_read_groups(npz, meta, refit), meta)
 
 

@@ -2,7 +2,8 @@
 
 Like the recording scripts of Maestre et al. 2010, the exercises cover the techniques x five
 dynamics x contexts (slur position, run position, tempo) x four strings. The constants are
-``[script]`` of ``gesture_db/config/simulate.toml``; open strings are the violin's facts.
+``[script]`` of ``gesture_db/config/simulate.toml``; open strings are the facts of the
+instrument played (:mod:`data_schemas.instruments`).
 """
 
 from __future__ import annotations
@@ -14,18 +15,28 @@ from data_schemas.annotation import TECHNIQUES
 from data_schemas.instruments import finger_ratio, instrument_facts
 from gesture_db.simulate_config import simulator_config
 
-#: The simulated performer's instrument.
+#: The simulated performer's default instrument.
 INSTRUMENT = "violin"
 
 
-def script_finger_ratio(midi_pitch: np.ndarray | int, string: np.ndarray | int) -> np.ndarray:
-    """Finger ratio of a pitch on a violin string (0 = G); pitches below it count as open."""
-    opens = np.asarray(instrument_facts(INSTRUMENT).open_strings, float)
+def script_finger_ratio(midi_pitch: np.ndarray | int, string: np.ndarray | int,
+                        instrument: str = INSTRUMENT) -> np.ndarray:
+    """Finger ratio of a pitch on a string (0 = lowest); pitches below it count as open.
+
+    Examples
+    --------
+    >>> float(script_finger_ratio(69, 2))  # the violin's open A
+    0.0
+    >>> round(float(script_finger_ratio(48, 0, "cello")), 4)  # an octave up the C string
+    0.5
+    """
+    opens = np.asarray(instrument_facts(instrument).open_strings, float)
     semis = np.asarray(midi_pitch, float) - opens[np.asarray(string)]
     return finger_ratio(np.maximum(semis, 0.0))
 
 
-def recording_script(n_notes: int, rng: np.random.Generator) -> pd.DataFrame:
+def recording_script(n_notes: int, rng: np.random.Generator,
+                     instrument: str = INSTRUMENT) -> pd.DataFrame:
     """Generate a recording script of scales and short exercises.
 
     Exercises cycle through every technique x five dynamics x four strings (shuffled) and
@@ -38,20 +49,23 @@ def recording_script(n_notes: int, rng: np.random.Generator) -> pd.DataFrame:
         Number of notes (the last exercise is cut to fit).
     rng : numpy.random.Generator
         Random source.
+    instrument : {"violin", "viola", "cello"}
+        Instrument whose open strings the exercises are written for.
 
     Returns
     -------
     pandas.DataFrame
-        One row per note: ``exercise``, ``run``, ``onset`` (nominal, s), ``duration`` (s),
+        One row per note: ``instrument``, ``exercise``, ``run``,
+        ``onset`` (nominal, s), ``duration`` (s),
         ``rest_after`` (s), ``midi_pitch``, ``string``, ``finger_ratio``, ``dynamic``,
         ``technique``, ``slur_position``, ``run_position``, ``tempo_bpm``.
     """
     cfg = simulator_config()["script"]
-    n_strings = instrument_facts(INSTRUMENT).n_strings
+    n_strings = instrument_facts(instrument).n_strings
     combos = [(t, d, s) for t in TECHNIQUES for d in cfg["dynamics"]
               for s in range(n_strings)]
     rows: list[dict] = []
-    state = {"time": cfg["start"], "exercise": 0, "run": 0}
+    state = {"time": cfg["start"], "exercise": 0, "run": 0, "instrument": instrument}
     while len(rows) < n_notes:
         for k in rng.permutation(len(combos)):
             if len(rows) >= n_notes:
@@ -59,8 +73,9 @@ def recording_script(n_notes: int, rng: np.random.Generator) -> pd.DataFrame:
             _exercise(rows, combos[k], n_notes - len(rows), state, cfg, rng)
             state["exercise"] += 1
     frame = pd.DataFrame(rows)
+    frame.insert(0, "instrument", instrument)
     frame["finger_ratio"] = script_finger_ratio(frame["midi_pitch"].to_numpy(),
-                                                frame["string"].to_numpy())
+                                                frame["string"].to_numpy(), instrument)
     return frame
 
 
@@ -70,7 +85,7 @@ def _exercise(rows: list[dict], combo: tuple[str, float, int], room: int, state:
     technique, dynamic, string = combo
     lo, hi = cfg["durations"][technique]
     dur = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-    pitches, strings = _exercise_pitches(technique, string, rng)
+    pitches, strings = _exercise_pitches(technique, string, rng, state["instrument"])
     pitches = pitches[:room]
     strings = strings[: len(pitches)]
     runs = _split_runs(len(pitches), technique, rng)
@@ -94,10 +109,11 @@ def _exercise(rows: list[dict], combo: tuple[str, float, int], room: int, state:
         state["run"] += 1
 
 
-def _exercise_pitches(technique: str, string: int, rng: np.random.Generator):
+def _exercise_pitches(technique: str, string: int, rng: np.random.Generator,
+                      instrument: str = INSTRUMENT):
     """Pitches and strings of one exercise: a scale on one string or a two-string pattern."""
     cfg = simulator_config()["script"]
-    facts = instrument_facts(INSTRUMENT)
+    facts = instrument_facts(instrument)
     opens = facts.open_strings
     n = int(rng.integers(*cfg["notes_per_exercise"]))
     if rng.random() < cfg["scale_share"] or string == facts.n_strings - 1:

@@ -21,7 +21,7 @@ units of ``continuity_scale``). Weights live in ``gesture_db/config/search.toml`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -106,6 +106,9 @@ class GroupIndex:
     feature_mean : np.ndarray [shape=(k,)]
     start, end : np.ndarray [shape=(n, 3)]
         Bezier velocity (m/s), force (N) and beta at the note's start and end.
+    quality : np.ndarray [shape=(n,)] or None
+        Quality cost of each sample from its practice renders (0 = every sustained hop in
+        Helmholtz motion; see :func:`quality_costs`); None: not judged.
     """
 
     note_id: np.ndarray
@@ -119,6 +122,7 @@ class GroupIndex:
     feature_mean: np.ndarray
     start: np.ndarray
     end: np.ndarray
+    quality: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.note_id.size)
@@ -181,18 +185,41 @@ class SearchIndex:
         self.source = source
 
     @classmethod
-    def from_db(cls, db) -> SearchIndex:
-        """Index a :class:`gesture_db.store.GestureDB`."""
+    def from_db(cls, db, *, instrument: str | None = None,
+                quality: pd.DataFrame | None = None) -> SearchIndex:
+        """Index a :class:`gesture_db.store.GestureDB`.
+
+        Parameters
+        ----------
+        db : gesture_db.store.GestureDB
+        instrument : str, optional
+            Index only the notes played on this instrument (default all).
+        quality : pandas.DataFrame, optional
+            :data:`data_schemas.gesture_db.DB_QUALITY` rows: judged samples get their
+            :func:`quality_costs`, the others the mean cost of the index's judged samples.
+        """
         from gesture_db.store import model_from_row
 
         notes = db.notes()
+        if instrument is not None:
+            notes = notes[notes["instrument"] == instrument]
+        cost = None if quality is None or not len(quality) else \
+            pd.Series(quality_costs(quality),
+                      index=quality["note_id"].to_numpy()).groupby(level=0).mean()
+        if cost is not None:
+            own = cost.reindex(notes["note_id"].to_numpy()).to_numpy(np.float64)
+            fill = float(np.mean(own[np.isfinite(own)])) if np.isfinite(own).any() else 0.0
         models = db.models().set_index("group")
         groups = {}
         for group, rows in notes.groupby("group", sort=True):
             model = model_from_row(models.loc[group])
-            groups[str(group)] = build_group_index(rows, str(group), model.feature_mean,
-                                                   model.feature_cov)
-        return cls(groups, source=str(db.path))
+            gi = build_group_index(rows, str(group), model.feature_mean, model.feature_cov)
+            if cost is not None:
+                q = cost.reindex(gi.note_id).to_numpy(np.float64)
+                gi = replace(gi, quality=np.where(np.isfinite(q), q, fill))
+            groups[str(group)] = gi
+        name = str(db.path) if instrument is None else f"{db.path} ({instrument})"
+        return cls(groups, source=name)
 
     @property
     def n_notes(self) -> int:
@@ -394,8 +421,37 @@ def _target_costs(t: pd.DataFrame, pred: np.ndarray, gi: GroupIndex,
     d2 = (np.sum(pw**2, axis=1)[:, None] + np.sum(gi.whitened**2, axis=1)[None, :]
           - 2.0 * pw @ gi.whitened.T)
     cg = np.sqrt(np.maximum(d2, 0.0) / pw.shape[1])
-    return w["basic"] * basic + w["gesture"] * cg, cg
+    cost = w["basic"] * basic + w["gesture"] * cg
+    if gi.quality is not None:
+        cost = cost + w["quality"] * gi.quality[None, :]
+    return cost, cg
+
+
+def quality_costs(quality: pd.DataFrame) -> np.ndarray:
+    """Quality cost of judged samples from their sustained hops' class histograms.
+
+    The share of sustained hops not in Helmholtz motion (class 3) plus the share the teacher
+    calls class 5 ("not a violin") again: 0 for a sample that sounds right throughout, 2 for
+    one that never sounds like a string instrument.
+
+    Parameters
+    ----------
+    quality : pandas.DataFrame
+        ``class_counts`` (5 counts per sample, classes 1-5).
+
+    Examples
+    --------
+    >>> q = pd.DataFrame({"class_counts": [[0, 0, 10, 0, 0], [0, 2, 6, 0, 2], [0, 0, 0, 0, 0]]})
+    >>> quality_costs(q).round(3).tolist()
+    [0.0, 0.6, 1.0]
+    """
+    counts = np.vstack(quality["class_counts"].to_numpy()).astype(np.float64)
+    total = counts.sum(axis=1)
+    good = np.where(total > 0, counts[:, 2] / np.maximum(total, 1), 0.0)
+    bad5 = np.where(total > 0, counts[:, 4] / np.maximum(total, 1), 0.0)
+    return 1.0 - good + bad5
 
 
 __all__ = ["EmptyGroupsError", "GroupIndex", "SearchIndex", "SearchResult",
-           "build_group_index", "edge_values", "group_distance", "resolve_groups", "search"]
+           "build_group_index", "edge_values", "group_distance", "quality_costs", "resolve_groups",
+           "search"]

@@ -50,6 +50,11 @@ class Performer:
         Fraction of a staccato note during which the bow moves.
     finger_lead : float
         How long before a bow change the finger moves (s, mean).
+    crescendo : float
+        Relative swell of velocity and force over a run (phrase), first to last note;
+        sustained notes inside a run tilt with it.
+    accent : float
+        Relative extra force on the first note of a slur or a run.
     """
 
     name: str
@@ -65,6 +70,8 @@ class Performer:
     vibrato: float
     staccato_fill: float
     finger_lead: float
+    crescendo: float
+    accent: float
 
 
 _FIELDS = tuple(f.name for f in fields(Performer) if f.name != "name")

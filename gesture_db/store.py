@@ -29,6 +29,7 @@ from data_schemas.gesture_db import (
     DB_CONTOURS,
     DB_GROUP_MODELS,
     DB_NOTES,
+    DB_QUALITY,
     read_manifest,
 )
 from data_schemas.io import atomic_path, read_frame, write_table
@@ -109,13 +110,25 @@ class GestureDB:
         return sorted(self.manifest["files"]["notes"])
 
     def notes(self, group: str | None = None) -> pd.DataFrame:
-        """Notes (all groups, or one), sorted by ``note_id``."""
+        """Notes (all groups, or one), sorted by ``note_id``.
+
+        A note without an ``instrument`` (a schema 1.0 database) was played on a violin.
+        """
         files = self.manifest["files"]["notes"]
         names = [group] if group else sorted(files)
         parts = [read_frame(self.path / files[g], DB_NOTES) for g in names if g in files]
         if not parts:
             return DB_NOTES.schema.empty_table().to_pandas()
-        return pd.concat(parts, ignore_index=True).sort_values("note_id", ignore_index=True)
+        notes = pd.concat(parts, ignore_index=True).sort_values("note_id", ignore_index=True)
+        if "instrument" not in notes:
+            notes["instrument"] = "violin"
+        notes["instrument"] = notes["instrument"].fillna("violin")
+        return notes
+
+    @property
+    def instruments(self) -> list[str]:
+        """Instruments whose notes the database holds."""
+        return sorted(self.notes()["instrument"].astype(str).unique())
 
     def contours(self, group: str) -> pd.DataFrame:
         """Contour frames of one group."""
@@ -138,6 +151,17 @@ class GestureDB:
             raise SchemaError(f"no model for group '{group}'", source=str(self.path))
         return model_from_row(rows.iloc[0]), Grammar.from_json(rows.iloc[0]["grammar"])
 
+    def quality(self) -> pd.DataFrame | None:
+        """The judged samples of this generation (:data:`DB_QUALITY`), None if not judged."""
+        path = quality_path(self.path, int(self.manifest["generation"]))
+        return read_frame(path, DB_QUALITY) if path.exists() else None
+
+    def write_quality(self, quality: pd.DataFrame) -> Path:
+        """Write the judged samples of this generation (validated, atomically)."""
+        path = quality_path(self.path, int(self.manifest["generation"]))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        return write_table(quality, path, DB_QUALITY)
+
     def verify(self) -> None:
         """Open every file of the database (raises SchemaError naming a bad one)."""
         self.notes()
@@ -145,6 +169,11 @@ class GestureDB:
         for src in self.manifest["sources"].values():
             for f in src["contour_files"]:
                 read_frame(self.path / f, DB_CONTOURS)
+
+
+def quality_path(db: Path, generation: int) -> Path:
+    """Where the judged samples of a database generation live."""
+    return Path(db) / "quality" / f"gen-{generation}.parquet"
 
 
 def model_row(group: str, n_notes: int, grammar: Grammar, model: GroupModel,
@@ -195,5 +224,5 @@ def remove_unlisted(db: Path, manifest: dict) -> None:
         f.unlink(missing_ok=True)
 
 
-__all__ = ["GestureDB", "contour_path", "model_from_row", "model_row", "read_source",
-           "remove_unlisted", "source_notes_path", "write_source"]
+__all__ = ["GestureDB", "contour_path", "model_from_row", "model_row", "quality_path",
+           "read_source", "remove_unlisted", "source_notes_path", "write_source"]

@@ -67,7 +67,8 @@ def _sustained(plan: pd.DataFrame, i: int, j: int, t: np.ndarray, v: np.ndarray,
     ramp_up = min(np.pi * V / (2 * acc), share * (end - on0))
     ramp_dn = min(np.pi * V / (2 * acc * rng.uniform(*cfg["ramp_jitter"])), share * (end - on0))
     u = (tt - on0) / (end - on0)
-    shape = (1 + rng.normal(0, cfg["shape_sd"]) * (u - 0.5)) * np.sin(
+    tilt = plan["tilt"].iloc[i] if "tilt" in plan else 0.0
+    shape = (1 + (tilt + rng.normal(0, cfg["shape_sd"])) * (u - 0.5)) * np.sin(
         0.5 * np.pi * np.clip((tt - on0) / ramp_up, 0, 1)) * np.sin(
         0.5 * np.pi * np.clip((end - tt) / ramp_dn, 0, 1))
     v[s] = d * V * shape

@@ -15,6 +15,7 @@ import pytest
 from data_schemas.errors import SchemaError
 from gesture_db.predict import (
     CANDIDATES,
+    CONTEXT_COLUMNS,
     GroupPredictor,
     PredictorError,
     Predictors,
@@ -116,7 +117,7 @@ def _fake_db(tmp_path: Path, generation: int = 3):
 @pytest.fixture(scope="module")
 def fitted_candidates():
     rng = np.random.default_rng(0)
-    X = rng.normal(size=(200, 10))
+    X = rng.normal(size=(200, len(CONTEXT_COLUMNS)))
     F = np.column_stack([X[:, 0] * 2 + X[:, 1] ** 2, np.sin(X[:, 2]), X[:, 3] * X[:, 4]])
     F = F + 0.1 * rng.normal(size=F.shape)
     groups = {}
@@ -128,7 +129,7 @@ def fitted_candidates():
     meta = {"db_generation": 3, "groups": {
         g: {"model": p.model, "mae": p.mae, "scores": p.scores, "n_notes": p.n_notes,
             "n_recordings": p.n_recordings} for g, p in groups.items()}}
-    return Predictors(groups, meta), rng.normal(size=(2000, 10)) * 1.5
+    return Predictors(groups, meta), rng.normal(size=(2000, len(CONTEXT_COLUMNS))) * 1.5
 
 
 def test_saved_and_loaded_predictors_predict_as_the_fitted_ones(tmp_path, fitted_candidates):

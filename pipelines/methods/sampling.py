@@ -25,69 +25,21 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from data_schemas.actions import ACTIONS
 from data_schemas.errors import ParameterError
 from data_schemas.instruments import finger_ratio, instrument_facts, limits
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
 from pipelines.methods.result import PartRender, RenderResult, mix
+from pipelines.methods.sampling_db import SamplingDatabase, adapt_forces, open_database
 from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.rules import fermata_warp
 from pipelines.perform.timing import player_warp
 from pipelines.score.select import choose_parts
 
-#: Effective string lengths of targets are violin-equivalent (the database holds violin takes).
+#: Effective string lengths of transferred targets are violin-equivalent.
 VIOLIN = instrument_facts("violin")
 #: Staccato notes shorter than this (s) are played spiccato (off the string).
 SPICCATO_BELOW = 0.2
-
-
-@dataclass
-class SamplingDatabase:
-    """A gesture database opened for sampling: search index, predictors and contours.
-
-    Build it once with :func:`open_database` and pass it to every render (the index and the
-    predictors are the expensive part).
-    """
-
-    db: Any
-    index: Any
-    predictors: Any
-    contours: Any
-    search_config: dict[str, Any]
-
-
-def open_database(path: str | os.PathLike, *, search_config: str | os.PathLike | None = None,
-                  predictors: bool = True, progress: bool = False) -> SamplingDatabase:
-    """Open a gesture database for sampling.
-
-    Parameters
-    ----------
-    path : path-like
-        Database directory (``arco build-db``).
-    search_config : path-like, optional
-        TOML merged over ``gesture_db/config/search.toml``.
-    predictors : bool
-        Load the per-group feature regressors (fitted and saved beside the database on
-        first use); False predicts each group's mean features.
-    progress : bool
-        Progress bar while fitting predictors.
-
-    Raises
-    ------
-    SchemaError
-        No database at ``path`` or one of another schema version.
-    """
-    from gesture_db.assemble import ContourSource
-    from gesture_db.predict import load_or_fit_predictors
-    from gesture_db.search import SearchIndex
-    from gesture_db.search_config import load_search_config
-    from gesture_db.store import GestureDB
-
-    db = GestureDB(path)
-    pred = load_or_fit_predictors(db, progress=progress) if predictors else None
-    return SamplingDatabase(db, SearchIndex.from_db(db), pred, ContourSource(db),
-                            load_search_config(search_config))
 
 
 @dataclass
@@ -113,8 +65,8 @@ def technique_of(e: Event) -> str:
     return "detache"
 
 
-def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.DataFrame,
-                                                                          list[Event]]:
+def targets_from_events(events: list[Event], notes: pd.DataFrame, *,
+                        sampled_from: str = "violin") -> tuple[pd.DataFrame, list[Event]]:
     """Sampling targets of the bowed events of one part.
 
     Parameters
@@ -123,6 +75,9 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.Da
         :func:`pipelines.perform.rules.build_events` output.
     notes : pandas.DataFrame
         The notes the events index (for pitches).
+    sampled_from : str
+        Instrument of the samples: the targets' effective string lengths are on its
+        strings (a transfer from the violin: violin-equivalent).
 
     Returns
     -------
@@ -163,7 +118,7 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame) -> tuple[pd.Da
     frame = pd.DataFrame({
         "onset": t0, "duration": np.maximum(duration, 1e-3), "midi_pitch": top_pitch,
         "string": [e.strings[-1] for e in bowed], "finger_ratio": fr,
-        "effective_string_length": VIOLIN.effective_length(fr),
+        "effective_string_length": instrument_facts(sampled_from).effective_length(fr),
         "dynamic": np.clip([e.dynamic for e in bowed], 0.0, 9.0), "technique": tech,
         "bow_direction": direction, "slur_position": slur, "run_position": run})
     frame["group"] = (frame["technique"] + "-" + frame["bow_direction"] + "-"
@@ -207,34 +162,6 @@ def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
     return validate_actions(table.reset_index(drop=True), source="gesture sampling")
 
 
-def adapt_forces(actions: pd.DataFrame, instrument: str,
-                 search_config: dict[str, Any]) -> pd.DataFrame:
-    """Rescale recorded bow forces to the instrument model's strings.
-
-    The recorded performer played another instrument; each of this model's strings has its
-    own Helmholtz window (its ``reference_force``, measured at 0.3 m/s and beta 0.1). Forces
-    are multiplied by ``reference_force / recorded_reference_force`` per string, where
-    ``recorded_reference_force`` (``[render]`` in the search settings, N) is the recordings'
-    typical force at that velocity and beta (0.6 N for the simulated performer).
-
-    Returns
-    -------
-    pandas.DataFrame
-        A copy with rescaled ``bow_force`` (pluck rows untouched).
-    """
-    from pipelines.perform.rules import string_force_factors
-
-    recorded = float(search_config.get("render", {}).get("recorded_reference_force", 0.0))
-    if recorded <= 0.0:
-        return actions
-    out = actions.copy()
-    bowed = ~out["pluck"].to_numpy(bool)
-    factor = string_force_factors(instrument)[out["string"].to_numpy(int)] / recorded
-    out.loc[bowed, "bow_force"] = np.clip(out.loc[bowed, "bow_force"] * factor[bowed], 0.0,
-                                          ACTIONS.column("bow_force").maximum)
-    return out
-
-
 def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[str, Any], *,
                 instrument: str | None = None, warp=None, transpose_octaves: bool = False,
                 rng: np.random.Generator | None = None) -> tuple[Performance, pd.DataFrame,
@@ -257,14 +184,18 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     _name, notes, _strings, events = prepare_events(
         notes, config, instrument=instrument, rng=rng, warp=warp,
         transpose_octaves=transpose_octaves)
-    targets, _bowed = targets_from_events(events, notes)
-    result = search(targets, database.index, predictors=database.predictors,
+    index, source, transfer = database.index_for(_name)
+    targets, _bowed = targets_from_events(events, notes, sampled_from=source)
+    targets.attrs["instrument"] = source
+    result = search(targets, index, predictors=database.predictors,
                     config=database.search_config)
-    actions = assemble_actions(targets, result.choices, database.contours)
-    actions = adapt_forces(actions, _name, database.search_config)
+    actions = assemble_actions(targets, result.choices, database.contours,
+                               bow_length=instrument_facts(_name).bow_length)
+    actions = adapt_forces(actions, _name, database.search_config, sampled_from=source)
     actions = _extra_rows(actions, events)
-    warnings = [f"note group {g} is not in the database; sampled from {r}"
-                for g, r in sorted(result.fallbacks.items())]
+    warnings = [transfer] if transfer else []
+    warnings += [f"note group {g} is not in the database; sampled from {r}"
+                 for g, r in sorted(result.fallbacks.items())]
     return Performance(actions, events_table(events, notes), warnings), targets, result.choices
 
 
@@ -469,5 +400,5 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     return y, played, diagnostics_table(log, sample_rate)
 
 
-__all__ = ["SampledPart", "SamplingDatabase", "correct_force", "open_database",
+__all__ = ["SampledPart", "SamplingDatabase", "adapt_forces", "correct_force", "open_database",
            "render_sampling", "sample_part", "targets_from_events", "technique_of"]

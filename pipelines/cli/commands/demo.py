@@ -40,12 +40,16 @@ SAMPLE_RATE = 44100
 #: Scale notes further than this from their pitch are flagged in the report, cents.
 PITCH_TOLERANCE_CENTS = 10.0
 DEMO_MEASURES = (1, 8)
-#: Size of the simulated recording set of the demo (notes, performers).
-DEMO_RECORDINGS = (2000, 3)
 #: Seeds of the demo's comparisons.
 DEMO_SEEDS = 2
 #: The quick held-out run: the protocol's first excerpts, measures of each.
 HELDOUT_QUICK = (2, 4)
+#: Simulated performers per instrument of the demo's recordings.
+DEMO_PERFORMERS = 3
+#: Simulated notes per instrument of the demo's database (quick settings for viola, cello).
+DEMO_INSTRUMENT_NOTES = {"violin": 2000, "viola": 1000, "cello": 1000}
+#: Samples per group and instrument the demo judges by playing them (``arco db judge``).
+DEMO_JUDGED_PER_GROUP = 3
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -146,12 +150,19 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
 
     from pipelines.cli.main import main
 
-    notes, performers = DEMO_RECORDINGS
+    performers = DEMO_PERFORMERS
+    notes = DEMO_INSTRUMENT_NOTES["violin"]
     steps = [
-        ["simulate-recordings", "--notes", str(notes), "--performers", str(performers),
-         "--seed", str(seed + 1), "-o", str(out / "recordings")],
-        ["build-db", str(out / "recordings"), "-o", str(out / "db"), "--workers", str(workers)],
+        ["simulate-recordings", "--instrument", name, "--notes", str(count),
+         "--performers", str(performers), "--seed", str(seed + 1 + k),
+         "-o", str(out / "recordings" / name)]
+        for k, (name, count) in enumerate(DEMO_INSTRUMENT_NOTES.items())]
+    steps += [
+        ["build-db", *(str(out / "recordings" / name) for name in DEMO_INSTRUMENT_NOTES),
+         "-o", str(out / "db"), "--workers", str(workers)],
         ["db", "info", str(out / "db"), "--no-plots"],
+        ["db", "judge", str(out / "db"), "--per-group", str(DEMO_JUDGED_PER_GROUP),
+         "--seed", str(seed)],
         *(["train", "--instrument", name, "--teacher", "auto", "--quick",
            "-o", str(out / "models"), "--workers", str(workers), "--seed", str(seed)]
           for name in INSTRUMENT_NAMES),
@@ -172,12 +183,15 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
         code = main(step)
         if code != 0:
             raise RuntimeError(f"demo step failed: arco {' '.join(step)}")
-        label = {"db": "db info", "train": f"train {step[2]}"}.get(step[0], step[0])
+        label = {"db": f"db {step[1]}", "train": f"train {step[2]}"}.get(step[0], step[0])
         timings.append((label, time.perf_counter() - start))
     results = json.loads((out / "report" / "results.json").read_text())
     stem = bundled_score().stem
     lines = ["## Gesture sampling against feedback control", "",
-             f"{notes} simulated notes by {performers} performers -> gesture database -> "
+             f"{notes} violin, {DEMO_INSTRUMENT_NOTES['viola']} viola and "
+             f"{DEMO_INSTRUMENT_NOTES['cello']} cello simulated notes by {performers} "
+             f"performers each -> gesture database ({DEMO_JUDGED_PER_GROUP} samples per "
+             "group and instrument judged by playing them) -> "
              "listening models for the 16 string x dynamic pairs of violin, viola and cello "
              f"(all four parts of K. 421 played with feedback control: `{stem}-feedback.wav`) "
              f"-> the first violin of K. 421, measures {DEMO_MEASURES[0]}-{DEMO_MEASURES[1]}, "

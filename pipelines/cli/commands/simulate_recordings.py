@@ -1,4 +1,4 @@
-"""``arco simulate-recordings``: recordings of a simulated violinist, with ground truth."""
+"""``arco simulate-recordings``: recordings of a simulated string player, with ground truth."""
 
 from __future__ import annotations
 
@@ -15,6 +15,8 @@ def register(subparsers) -> None:
         description="Play recording scripts (scales and exercises over articulations, five "
                     "dynamics, contexts and four strings) with simulated performers; write "
                     "one recording and one annotation (with true boundaries) per take.")
+    p.add_argument("--instrument", choices=("violin", "viola", "cello"), default="violin",
+                   help="instrument played: its strings, string lengths, bow and forces")
     p.add_argument("--notes", type=positive_int, default=10000, help="total notes")
     p.add_argument("--performers", type=positive_int, default=3, help="performer styles")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
@@ -37,6 +39,30 @@ def run(args: argparse.Namespace) -> int:
     bases = load_performers(args.performers_config) if args.performers_config else None
     paths = simulate_recordings(args.notes, args.performers, args.output, seed=args.seed,
                                 notes_per_take=args.notes_per_take,
-                                frame_rate=args.frame_rate, performers=bases, progress=True)
-    print(f"wrote {len(paths)} takes ({args.notes} notes) to {args.output}")
+                                frame_rate=args.frame_rate, performers=bases,
+                                instrument=args.instrument,
+                                force_factors=string_forces(args.instrument), progress=True)
+    print(f"wrote {len(paths)} {args.instrument} takes ({args.notes} notes) to {args.output}")
     return 0
+
+
+def string_forces(instrument: str):
+    """Per-string force of a player of ``instrument`` relative to the violinist's table.
+
+    The ratio of the instrument model's reference force of each string to the violin's
+    string of the same index (``synth/config/strings.toml``): a violist or cellist bows each
+    string as the violinist bows its own, scaled to the string's Helmholtz window.
+
+    Returns
+    -------
+    np.ndarray [shape=(4,)]
+        Factors, lowest string first.
+
+    Examples
+    --------
+    >>> string_forces("violin").tolist()
+    [1.0, 1.0, 1.0, 1.0]
+    """
+    from pipelines.perform.rules import string_force_factors
+
+    return string_force_factors(instrument) / string_force_factors("violin")
