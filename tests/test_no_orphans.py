@@ -108,7 +108,7 @@ def test_kill_9_leaves_no_workers(takes, tmp_path, command):
 
 def test_ctrl_c_stops_the_workers(takes, tmp_path):
     proc = _build_db(takes, tmp_path)
-    workers = _workers_of(proc, 2, settle=0.2)
+    workers = _workers_of(proc, 2, settle=1.0)  # the pool is working on the 20 takes
     assert proc.poll() is None, "the build ended before it could be interrupted"
     os.killpg(proc.pid, signal.SIGINT)  # what the terminal sends on Ctrl-C
     code = proc.wait(timeout=30)
