@@ -6,6 +6,31 @@ import pytest
 from _listening import MF_PAIRS, PAIR, TINY
 
 
+def pytest_configure(config):
+    """Compile (and cache) librosa's numba pitch kernels once, before xdist starts workers.
+
+    In a fresh virtual environment several workers otherwise compile and write librosa's
+    cached gufuncs (``_parabolic_interpolation`` of ``librosa.yin``, ``localmax``, ``peak_pick``, ...; numba
+    issue 10128) at the same moment,
+    and a worker that loads a half-written cache entry dies of a segmentation fault.
+    """
+    if hasattr(config, "workerinput"):  # an xdist worker: the controller warmed the cache
+        return
+    import librosa
+    import numpy as np
+
+    for dtype in (np.float32, np.float64):  # each dtype is its own cached signature
+        tone = np.sin(2 * np.pi * 220.0 * np.arange(8192) / 22050.0).astype(dtype)
+        librosa.yin(tone, fmin=110.0, fmax=880.0, sr=22050, frame_length=2048)
+        librosa.pyin(tone, fmin=110.0, fmax=880.0, sr=22050, frame_length=2048)
+        librosa.zero_crossings(tone)
+        for x in (tone[:64], np.stack([tone[:64], tone[64:128]])):
+            librosa.util.localmax(x, axis=-1)
+            librosa.util.localmin(x, axis=-1)
+        librosa.util.peak_pick(tone[:256], pre_max=3, post_max=3, pre_avg=3, post_avg=5,
+                               delta=0.1, wait=10)
+
+
 @pytest.fixture(scope="session")
 def models_dir(tmp_path_factory):
     """Violin D-string mf pair trained with TINY grids (reused: training resumes)."""
