@@ -10,9 +10,9 @@ def pytest_configure(config):
     """Compile (and cache) librosa's numba pitch kernels once, before xdist starts workers.
 
     In a fresh virtual environment several workers otherwise compile and write librosa's
-    cached gufuncs (``_parabolic_interpolation`` of ``librosa.yin``, ``localmax``, ``peak_pick``, ...; numba
-    issue 10128) at the same moment,
-    and a worker that loads a half-written cache entry dies of a segmentation fault.
+    cached gufuncs (``librosa.yin``'s parabolic interpolation, ``localmax``, ``peak_pick``,
+    ...) at the same moment, and a worker that loads a cache pair written by two processes
+    dies of a segmentation fault (numba issue 10128).
     """
     if hasattr(config, "workerinput"):  # an xdist worker: the controller warmed the cache
         return
