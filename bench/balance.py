@@ -22,6 +22,7 @@ import json
 import sys
 import tempfile
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +31,10 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from pipelines.reports.json_safe import json_safe  # noqa: E402
+
+#: JSON-safe figures, rounded to 2 decimals.
+clean = partial(json_safe, digits=2)
 SAMPLE_RATE = 44100
 VELOCITIES = {"p": 49, "mf": 80, "f": 96}
 PROGRAMS = {"violin": (40, "Violin"), "viola": (41, "Viola"), "cello": (42, "Cello")}
@@ -154,16 +159,6 @@ def quartet_figures(config: dict, folder: Path, measures: int, limit: int | None
     out["max_spread_db"] = float(np.max(spreads)) if spreads else None
     out["share_within_3db"] = float(np.mean(np.array(spreads) <= 3.0)) if spreads else None
     return out
-
-
-def clean(value):
-    if isinstance(value, dict):
-        return {str(k): clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [clean(v) for v in value]
-    if isinstance(value, float | np.floating):
-        return round(float(value), 2) if np.isfinite(value) else None
-    return value
 
 
 def main(argv: list[str] | None = None) -> int:

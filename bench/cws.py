@@ -39,6 +39,7 @@ import json
 import sys
 import tempfile
 import time
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -50,7 +51,11 @@ sys.path.insert(0, str(ROOT))
 
 from data_schemas.errors import ArcoError  # noqa: E402
 from pipelines.reports import baselines, recordings, timbre  # noqa: E402
+from pipelines.reports.json_safe import json_safe  # noqa: E402
 from pipelines.reports.leave_out import shared_recordings_folder, without  # noqa: E402
+
+#: JSON-safe figures, rounded to 3 decimals.
+clean = partial(json_safe, digits=3)
 
 SAMPLE_RATE = 44100
 ANALYSIS_RATE = 22050
@@ -180,18 +185,6 @@ def leave_one_out(db: Any, rec: recordings.Recording, args: argparse.Namespace,
     say(f"  {rec.name}: cws frechet {out['cws']['mfcc_frechet']:.0f}, fluidr3 "
         f"{out['fluidr3']['mfcc_frechet']}, rtf {out['cws']['real_time_factor']:.1f}")
     return out
-
-
-def clean(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {k: clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [clean(v) for v in value]
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, float | np.floating):
-        return round(float(value), 3) if np.isfinite(value) else None
-    return value
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:

@@ -41,6 +41,7 @@ import json
 import sys
 import tempfile
 import time
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -51,6 +52,10 @@ sys.path.insert(0, str(ROOT))
 
 from data_schemas.errors import ArcoError, ParameterError  # noqa: E402
 from pipelines.reports import baselines, loudness, recordings, timbre, vibrato  # noqa: E402
+from pipelines.reports.json_safe import json_safe  # noqa: E402
+
+#: JSON-safe figures, rounded to 3 decimals.
+clean = partial(json_safe, digits=3)
 
 SAMPLE_RATE = 44100
 VIBRATO = ("vibrato_share", "vibrato_extent_cents", "vibrato_rate_hz",
@@ -202,19 +207,6 @@ def frames_renderer(args: argparse.Namespace, config: dict, recs: list[recording
 
 def failed(reason: str) -> dict[str, Any]:
     return {**dict.fromkeys(FIGURES), "reason": reason}
-
-
-def clean(value: Any) -> Any:
-    """JSON-safe: NaN/inf -> None, numpy scalars -> Python, rounded to 4 significant-ish."""
-    if isinstance(value, dict):
-        return {k: clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [clean(v) for v in value]
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, float | np.floating):
-        return round(float(value), 3) if np.isfinite(value) else None
-    return value
 
 
 def read_table(rec: recordings.Recording, seconds: float):

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from data_schemas.io import atomic_path
+from pipelines.reports.json_safe import json_safe
 
 #: Figure -> (label, unit, which way is better).
 LABELS = {"mfcc_frechet": ("MFCC-frame Frechet distance", "", "lower better"),
@@ -31,29 +32,6 @@ LABELS = {"mfcc_frechet": ("MFCC-frame Frechet distance", "", "lower better"),
           "pitch_error_cents": ("pitch error, sustained notes (median)", "cents",
                                 "lower better"),
           "real_time_factor": ("real-time factor", "x", "higher better")}
-
-
-def clean(value: Any) -> Any:
-    """JSON-safe: NaN/inf -> None, numpy scalars -> Python floats/ints, paths -> str.
-
-    Examples
-    --------
-    >>> clean({"a": np.float64("nan"), "b": [np.int64(2), 1.23456]})
-    {'a': None, 'b': [2, 1.2346]}
-    """
-    if isinstance(value, Mapping):
-        return {str(k): clean(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [clean(v) for v in value]
-    if isinstance(value, bool | np.bool_):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, float | np.floating):
-        return round(float(value), 4) if np.isfinite(value) else None
-    if isinstance(value, Path):
-        return str(value)
-    return value
 
 
 def plot_bars(results: Mapping[str, Any], figure: str, path: Path) -> Path:
@@ -114,7 +92,7 @@ def html_section(results: Mapping[str, Any], plots: Mapping[str, str]) -> str:
 def write_engine_report(results: Mapping[str, Any], out_dir: Path) -> dict[str, Any]:
     """Write ``results.json``, ``bars-*.png`` and ``index.html``; return the clean results."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    data = clean(results)
+    data = json_safe(results, 4)
     plots = {f: plot_bars(data, f, out_dir / f"bars-{f}.png").name for f in data["figures"]}
     data["plots"] = plots
     with atomic_path(out_dir / "results.json") as tmp:
@@ -126,4 +104,4 @@ def write_engine_report(results: Mapping[str, Any], out_dir: Path) -> dict[str, 
     return data
 
 
-__all__ = ["clean", "html_section", "plot_bars", "write_engine_report"]
+__all__ = ["html_section", "plot_bars", "write_engine_report"]

@@ -22,6 +22,7 @@ import pandas as pd
 
 from data_schemas.io import atomic_path
 from pipelines.reports.figures import FIGURES, LABELS, REPORTED
+from pipelines.reports.json_safe import json_safe
 
 
 def results_frame(results: Mapping[str, Any]) -> pd.DataFrame:
@@ -35,16 +36,6 @@ def results_frame(results: Mapping[str, Any]) -> pd.DataFrame:
                             if isinstance(v, int | float | str) and k != "parts"})
                 rows.append(row)
     return pd.DataFrame(rows)
-
-
-def _json_safe(x):
-    if isinstance(x, dict):
-        return {str(k): _json_safe(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_json_safe(v) for v in x]
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
 
 
 def write_report(results: Mapping[str, Any], out_dir: str | Path, *,
@@ -72,7 +63,7 @@ def write_report(results: Mapping[str, Any], out_dir: str | Path, *,
     ordered = {"verdict": results["verdict"], "why_text": results["why_text"],
                **{k: v for k, v in results.items() if k not in ("verdict", "why_text")}}
     with atomic_path(paths["json"]) as tmp:
-        tmp.write_text(json.dumps(_json_safe(ordered), indent=1))
+        tmp.write_text(json.dumps(json_safe(ordered), indent=1))
     with atomic_path(paths["csv"]) as tmp:
         results_frame(results).to_csv(tmp, index=False)
     has_plot = bool(results["summary"])

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 
 from data_schemas.errors import ParameterError
@@ -40,16 +39,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="instrument that played (default: the part's, else violin)")
     p.add_argument("--json", action="store_true", help="print the full JSON")
     p.set_defaults(func=run)
-
-
-def _clean(obj):
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_clean(v) for v in obj]
-    return obj
 
 
 def rounded(x: float | None, digits: int = 3) -> str:
@@ -166,7 +155,9 @@ def run(args: argparse.Namespace) -> int:
     except ParameterError as exc:
         raise ParameterError(f"{args.audio} vs {source}: {exc}") from None
     check_pitch(result["piece"], f"{args.audio} vs {source}")
-    result = _clean(result)
+    from pipelines.reports.json_safe import json_safe
+
+    result = json_safe(result)
     if args.json:
         json.dump(result, sys.stdout, indent=2)
         print()
