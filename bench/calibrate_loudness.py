@@ -23,21 +23,22 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from data_schemas.instruments import finger_ratio, limits  # noqa: E402
-from pipelines.perform.config import dynamic_table, load_config  # noqa: E402
+from pipelines.perform.calibration_notes import (  # noqa: E402
+    NOTE,
+    SEMITONES,
+    note_starts,
+    steady_actions,
+)
+from pipelines.perform.config import load_config  # noqa: E402
 from pipelines.perform.loudness import TABLE_PATH, calibration_key  # noqa: E402
-from pipelines.perform.rules import string_force_factors  # noqa: E402
 
 SAMPLE_RATE = 44100
-NOTE, GAP, SKIP = 0.6, 0.3, 0.2  # s bowed, s between notes, s of attack left out
-FRAME = 0.005  # s between control frames (the rules' [frames] interval)
-SEMITONES = np.arange(28.0)
+SKIP = 0.2  # s of attack left out
 CURVE_SEMITONES = (0.0, 5.0, 12.0, 19.0)
 INSTRUMENTS = ("violin", "viola", "cello")
 
@@ -50,35 +51,6 @@ def grid() -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["string", "semitone", "level"])
 
 
-def steady_actions(instrument: str, notes: pd.DataFrame, config: dict) -> pd.DataFrame:
-    """An actions table of one steady detached note per row of ``notes``."""
-    ref = string_force_factors(instrument)
-    vib = config["vibrato"]
-    frames = []
-    for k, n in enumerate(notes.itertuples()):
-        t0 = k * (NOTE + GAP)
-        level = np.array([n.level])
-        v = float(dynamic_table(config, "velocity", level)[0])
-        f = float(dynamic_table(config, "force", level)[0]) * ref[n.string]
-        b = float(dynamic_table(config, "beta", level)[0])
-        t = np.concatenate([[t0], np.arange(t0 + 0.03, t0 + NOTE, FRAME), [t0 + NOTE,
-                                                                             t0 + NOTE + 0.02]])
-        on = np.ones(t.size)
-        on[0] = on[-1] = 0.0
-        # Stopped notes with the rules' vibrato at mf (open strings get none), so that the
-        # calibration hears a resonance the way a vibrato sweeps it.
-        cents = 0.0 if n.semitone == 0 else vib["extent"] * np.sin(
-            2 * np.pi * vib["rate"] * (t - t0))
-        ratio = np.minimum(finger_ratio(n.semitone + cents / 100.0), limits().max_finger_ratio)
-        d = 1.0 if k % 2 == 0 else -1.0
-        frames.append(pd.DataFrame({
-            "time": t, "string": np.full(t.size, n.string, np.int8),
-            "finger_ratio": ratio.astype(np.float32),
-            "bow_force": f * on, "bow_velocity": d * v * on, "beta": np.full(t.size, b),
-            "bow_position": np.full(t.size, 0.5), "pluck": np.zeros(t.size, bool)}))
-    return pd.concat(frames, ignore_index=True).sort_values("time", kind="stable")
-
-
 def measure(instrument: str, config: dict) -> pd.DataFrame:
     """Loudness (LUFS) of every calibration note of ``instrument``."""
     from pipelines.reports.loudness import note_loudness
@@ -87,7 +59,7 @@ def measure(instrument: str, config: dict) -> pd.DataFrame:
     notes = grid()
     audio = render_actions(steady_actions(instrument, notes, config), instrument=instrument,
                            sample_rate=SAMPLE_RATE, seed=0)
-    starts = np.arange(len(notes)) * (NOTE + GAP)
+    starts = note_starts(len(notes))
     notes["loudness"] = note_loudness(audio, SAMPLE_RATE, starts + SKIP, starts + NOTE,
                                       skip=0.0)
     notes.insert(0, "instrument", instrument)

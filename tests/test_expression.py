@@ -23,7 +23,7 @@ def plain_vibrato(**changes) -> dict:
                           performer_rate_sigma=0.0, performer_extent_sigma=0.0,
                           dynamic_rate=0.0, dynamic_extent=0.0, length_extent=0.0,
                           phrase_end_extent=1.0, **changes)
-    cfg["intonation"].update(sigma=0.0, semitone_step=0.0)
+    cfg["intonation"].update(sigma=0.0, semitone_step=0.0, by_ear=False)
     return cfg
 
 

@@ -41,6 +41,7 @@ def plain_config():
     cfg["vibrato"]["enabled"] = False
     cfg["intonation"]["sigma"] = 0.0
     cfg["intonation"]["semitone_step"] = 0.0
+    cfg["intonation"]["by_ear"] = False
     return cfg
 
 

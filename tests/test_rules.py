@@ -16,7 +16,7 @@ from pipelines.score import read_score
 CFG = load_config()
 # The notation rules are tested exact: no intonation, no vibrato (tests/test_expression.py).
 CFG["vibrato"]["enabled"] = False
-CFG["intonation"].update(sigma=0.0, semitone_step=0.0)
+CFG["intonation"].update(sigma=0.0, semitone_step=0.0, by_ear=False)
 # ... and the lanes as written (the loudness evening-out moves them: tests/test_loudness.py).
 CFG["loudness"]["enabled"] = False
 L = CFG["instruments"]["violin"]["bow_length"]

@@ -227,6 +227,9 @@ def _validate_expression(config: dict[str, Any], source: str) -> None:
                              f"{1.0 / (8.0 * vib['rate']):.4f} s: 8 frames a cycle)")
     _validate_ornaments(config, source)
     into = config["intonation"]
+    if not isinstance(into["by_ear"], bool):
+        raise ParameterError(f"{source}: intonation.by_ear={into['by_ear']!r} must be true "
+                             "or false")
     if not _is_number(into["sigma"]) or not 0 <= into["sigma"] <= 100:
         raise ParameterError(f"{source}: intonation.sigma={into['sigma']!r} must be in "
                              "[0, 100] cents")

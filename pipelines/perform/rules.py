@@ -25,6 +25,7 @@ import pandas as pd
 
 from data_schemas.actions import ACTIONS, validate_actions
 from data_schemas.instruments import instrument_facts
+from pipelines.perform.ear import correct_by_ear
 from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.expression import assign_vibrato, intonation_cents
 from pipelines.perform.instruments import choose_strings, fit_range
@@ -368,6 +369,7 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
     inst_cfg = config["instruments"][name]
     warnings: list[str] = []
     even_out(events, name, config, warnings)  # the marked dynamic -> the bowed lane level
+    correct_by_ear(events, name, config, warnings)  # fingers where the notes sound in tune
     if strings["rolled"].any():
         warnings.append(f"part {notes['part_name'].iloc[0]!r}: {int(strings['rolled'].sum())} "
                         "chord notes cannot be bowed at once and are rolled")
