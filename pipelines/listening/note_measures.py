@@ -178,7 +178,8 @@ def from_waveform(span: NoteSpan, pre: np.ndarray, hops: np.ndarray, sample_rate
     (:func:`~pipelines.listening.settled.cancel_period`). A period is regular when it
     repeats in the next (:func:`~pipelines.listening.regularity.period_correlation`) and
     its spectrum matches the note's settled one
-    (:func:`~pipelines.listening.settled.settled_distance`); the attack is timed from
+    (:func:`~pipelines.listening.settled.settled_distance`). A hop is in Helmholtz motion
+    when its median correlation and median distance pass both tests. The attack is timed from
     ``start`` (default: the note's start) to the first of
     :data:`~pipelines.listening.regularity.STABLE_PERIODS` regular periods.
     """
@@ -196,11 +197,13 @@ def from_waveform(span: NoteSpan, pre: np.ndarray, hops: np.ndarray, sample_rate
     x = x[i0 - lo:]
     corr = regularity.period_correlation(x, period)[:length]
     far = settled.settled_distance(x, period, length, sample_rate) if length else corr
-    med = np.zeros(hops.size)
-    for j, k in enumerate(hops):
-        seg = corr[max(k * HOP - i0, 0):max((k + 1) * HOP - i0, 0)]
-        med[j] = float(np.median(seg)) if seg.size else 0.0
     regular = (corr >= regularity.CORRELATION) & (far <= settled.SPECTRAL_DISTANCE)
+    med, share = np.zeros(hops.size), np.zeros(hops.size)
+    for j, k in enumerate(hops):
+        a, b = max(k * HOP - i0, 0), max((k + 1) * HOP - i0, 0)
+        med[j] = float(np.median(corr[a:b])) if b > a else 0.0
+        share[j] = float(np.median(far[a:b])) if b > a else np.inf
     attack = regularity.waveform_attack(regular.astype(np.float64), period, sample_rate,
                                         threshold=0.5)
-    return med >= regularity.CORRELATION, attack, med
+    helm = (med >= regularity.CORRELATION) & (share <= settled.SPECTRAL_DISTANCE)
+    return helm, attack, med
