@@ -6,7 +6,8 @@ extra slips change the harmonic spectrum (a second corner of relative phase ``s`
 harmonic ``k`` by ``|1 + c exp(-2 pi i k s)| / (1 + c)``), while the body and the room
 colour every period of a note alike. So the audio path also asks that each period's
 harmonic spectrum match the note's *settled* spectrum (its last part, where a note is
-normally in Helmholtz motion) within :data:`SPECTRAL_DISTANCE` dB.
+normally in Helmholtz motion) within :data:`SPECTRAL_DISTANCE` dB, or within the settled
+part's own spread when that is wider (a vibrato).
 
 Strings that ring on from earlier notes add their own periods to the audio; a comb that
 cancels a ringing note's period (:func:`cancel_period`) removes them before either test.
@@ -25,6 +26,9 @@ NYQUIST_SHARE = 0.4
 #: four parts of Mozart K. 421 (m. 1-6; 116 timed attacks) against the slip record;
 #: reported on other pieces too (``bench/yardstick.py``).
 SPECTRAL_DISTANCE = 3.0
+#: Percentile of the settled part's own distances from its median spectrum that widens
+#: the tolerance (vibrato).
+SETTLED_SPREAD = 90
 #: The settled spectrum: the median over the note's last share of its length ...
 SETTLED_SHARE = 0.4
 #: ... ending this long (s) before the note's end (the release).
@@ -102,7 +106,8 @@ def spectral_distance(magnitudes: np.ndarray, reference: np.ndarray) -> np.ndarr
     return np.sqrt(np.sum(weight * (diff - level[:, None]) ** 2, axis=1))
 
 
-def settled_distance(x: np.ndarray, period: float, length: int, sample_rate: int) -> np.ndarray:
+def settled_distance(x: np.ndarray, period: float, length: int,
+                     sample_rate: int) -> tuple[np.ndarray, float]:
     """Distance (dB) of every two-period window of a note from its settled spectrum.
 
     Parameters
@@ -117,8 +122,12 @@ def settled_distance(x: np.ndarray, period: float, length: int, sample_rate: int
 
     Returns
     -------
-    np.ndarray [shape=(length,)], dB
+    distance : np.ndarray [shape=(length,)], dB
         0 everywhere when the note is too short to hold a settled part (three periods).
+    tolerance : float, dB
+        The distance that still counts as settled: :data:`SPECTRAL_DISTANCE`, or the
+        settled part's own :data:`SETTLED_SPREAD` percentile distance when larger (a
+        vibrato moves the harmonics through the body's resonances by several dB).
     """
     k = max(1, min(HARMONICS, int(NYQUIST_SHARE * period)))
     mags = harmonic_magnitudes(x, period, k)[:length]
@@ -127,11 +136,13 @@ def settled_distance(x: np.ndarray, period: float, length: int, sample_rate: int
     lo = max(int((1.0 - SETTLED_SHARE) * length), 0)
     if hi - lo < period:
         lo, hi = length // 2, length - w
-    out = np.zeros(length)
     if hi - lo < period or mags.shape[0] < length:
-        return out
-    reference = np.median(mags[lo:hi:max(int(period) // 4, 1)], axis=0)
-    return spectral_distance(mags, reference)
+        return np.zeros(length), SPECTRAL_DISTANCE
+    step = max(int(period) // 4, 1)
+    reference = np.median(mags[lo:hi:step], axis=0)
+    distance = spectral_distance(mags, reference)
+    spread = float(np.percentile(distance[lo:hi:step], SETTLED_SPREAD))
+    return distance, max(SPECTRAL_DISTANCE, spread)
 
 
 def cancel_period(x: np.ndarray, period: float) -> np.ndarray:
