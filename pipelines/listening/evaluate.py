@@ -9,10 +9,12 @@ hops are judged two ways, on the same sustained hops
   (``measured_from: "instrument diagnostics"``): a hop is in Helmholtz motion when every
   slip interval over it is one regular period, and the attack lasts until the first of five
   consecutive regular periods, at the slip onsets' resolution;
-- from the audio alone (``"audio-only estimates"``, for recordings): a hop is in Helmholtz
-  motion when the waveform repeats period after period (period correlation of
-  :mod:`pipelines.listening.regularity`), and the attack lasts until five consecutive
-  periods repeat, at sample resolution.
+- from the audio alone (``"audio-only estimates"``, for recordings): a period is regular
+  when the waveform repeats in the next (period correlation of
+  :mod:`pipelines.listening.regularity`) and its harmonic spectrum matches the note's
+  settled one (:mod:`pipelines.listening.settled`), after the notes still ringing on other
+  strings are cancelled; the attack lasts until five consecutive regular periods, at
+  sample resolution, and a hop after it is in Helmholtz motion when it repeats.
 
 The teacher's five classes, the pitch and the level come from the audio for both.
 """

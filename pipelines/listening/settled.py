@@ -93,7 +93,7 @@ def spectral_distance(magnitudes: np.ndarray, reference: np.ndarray) -> np.ndarr
     --------
     >>> ref = np.array([1.0, 0.5, 0.25])
     >>> spectral_distance(np.array([2 * ref, [1.0, 0.05, 0.25]]), ref).round(2).tolist()
-    [0.0, 7.2]
+    [0.0, 8.37]
     """
     db = 20.0 * np.log10(np.maximum(np.asarray(magnitudes, np.float64), 1e-12))
     ref = 20.0 * np.log10(np.maximum(np.asarray(reference, np.float64), 1e-12))
