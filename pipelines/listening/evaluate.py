@@ -9,10 +9,12 @@ hops are judged two ways, on the same sustained hops
   (``measured_from: "instrument diagnostics"``): a hop is in Helmholtz motion when every
   slip interval over it is one regular period, and the attack lasts until the first of five
   consecutive regular periods, at the slip onsets' resolution;
-- from the audio alone (``"audio-only estimates"``, for recordings): a hop is in Helmholtz
-  motion when the waveform repeats period after period (period correlation of
-  :mod:`pipelines.listening.regularity`), and the attack lasts until five consecutive
-  periods repeat, at sample resolution.
+- from the audio alone (``"audio-only estimates"``, for recordings): a period is regular
+  when the waveform repeats in the next (period correlation of
+  :mod:`pipelines.listening.regularity`) and its harmonic spectrum matches the note's
+  settled one (:mod:`pipelines.listening.settled`), after the notes still ringing on other
+  strings are cancelled; the attack lasts until five consecutive regular periods, at
+  sample resolution, and a hop after it is in Helmholtz motion when it repeats.
 
 The teacher's five classes, the pitch and the level come from the audio for both.
 """
@@ -167,7 +169,8 @@ def evaluate(audio: np.ndarray, actions: pd.DataFrame | None = None, *,
                        [s.reference_force for s in consts.strings],
                        _lanes(score, config), margin)
     context.spans = spans if actions is None else None
-    results = [_note_figures(span, context, spans[i - 1] if i else None)
+    context.all_spans = spans
+    results = [_note_figures(span, context, spans[i - 1] if i else None, i)
                for i, span in enumerate(spans)]
     return {"measured_from": "instrument diagnostics" if slips else "audio-only estimates",
             "piece": piece_figures(results), "notes": results}
@@ -182,6 +185,7 @@ class _Context:
         self.actions, self.slips, self.per_hop, self.ref = actions, slips, per_hop, ref
         self.string_refs, self.lanes, self.margin = string_refs, lanes, margin
         self.spans: list[NoteSpan] | None = None  # timed notes (chords among them)
+        self.all_spans: list[NoteSpan] = []  # every judged note, in order of start
 
 
 def _lanes(score, config):
@@ -229,7 +233,8 @@ def _bowing(span: NoteSpan, t: np.ndarray, actions: pd.DataFrame | None):
     return tuple(np.interp(t, a["time"], a[c]) for c in ("bow_velocity", "bow_force", "beta"))
 
 
-def _note_figures(span: NoteSpan, ctx: _Context, previous: NoteSpan | None) -> dict[str, Any]:
+def _note_figures(span: NoteSpan, ctx: _Context, previous: NoteSpan | None,
+                  index: int) -> dict[str, Any]:
     sr = ctx.sample_rate
     hops = nm.note_hops(span, sr)
     sustained = nm.sustained_hops(span, hops, sr, ctx.actions, ctx.margin, ctx.spans)
@@ -240,7 +245,8 @@ def _note_figures(span: NoteSpan, ctx: _Context, previous: NoteSpan | None) -> d
     else:
         if ctx.margin > 0:
             start = nm.audio_onset(span, previous, ctx.pre, sr, ctx.margin)
-        helm, attack, _ = nm.from_waveform(span, ctx.pre, hops, sr, start)
+        ringing = nm.ringing_periods(span, ctx.all_spans[:index], sr)
+        helm, attack, _ = nm.from_waveform(span, ctx.pre, hops, sr, start, ringing)
     blocked = nm.attack_blocked(span, ctx.actions, ctx.spans)
     stats = _teacher_stats(span, hops, ctx)
     t = (hops + 0.5) * HOP / sr

@@ -9,12 +9,14 @@ The yardstick's two paths measure the same two things on the same notes and hops
 - **Waveform** (audio only, for recordings): the *period correlation* at sample ``t`` is the
   normalised correlation of the period-long window starting at ``t`` with the next window
   one period later (the best lag within :data:`PERIOD_TOLERANCE` of T0). A period from
-  ``t`` is regular when it reaches :data:`CORRELATION`; a hop is in Helmholtz motion when
-  the hop's median period correlation does.
+  ``t`` repeats when it reaches :data:`CORRELATION`. Multiple slipping at fixed phases
+  repeats too: the audio path's regular period also matches the note's settled spectrum
+  (:mod:`pipelines.listening.settled`, applied in
+  :func:`pipelines.listening.note_measures.from_waveform`).
 
 An attack lasts from the note's start to the first of :data:`STABLE_PERIODS` consecutive
 regular periods (slip record: the first of their slip onsets; waveform: the first sample
-from which that many periods each repeat in the next).
+from which that many periods are regular).
 """
 
 from __future__ import annotations
