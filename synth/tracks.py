@@ -86,8 +86,10 @@ class StringTrack:
         return np.interp(t, self.time, column)
 
     def touching(self, t: np.ndarray) -> np.ndarray | None:
-        """``finger_touch`` at times ``t``: the latest row's at or before each (the first
-        row's before it); None when no row touches."""
+        """``finger_touch`` at times ``t``: the latest row's at or before each.
+
+        Before the first row, the first row's; None when no row touches.
+        """
         if self.finger_touch is None:
             return None
         k = np.searchsorted(self.time, t, side="right") - 1
