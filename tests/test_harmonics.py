@@ -42,11 +42,12 @@ def _stroke(string: int, finger_ratio: float, touch, *, beta: float, force: floa
 
 
 def _harmonic(string: int, n: int) -> tuple[np.ndarray, float]:
-    """Bow the n-th natural harmonic (rules' beta: 0.1 / n, at least min_beta)."""
+    """Bow the n-th natural harmonic as the rules do at beta 0.1 (``[harmonics]``)."""
     const = load_instrument("violin").strings[string]
-    beta = max(0.1 / n, load_config()["harmonics"]["min_beta"])
+    harm = load_config()["harmonics"]
+    beta = max(0.1 * harm["segment_beta"] / n, harm["min_beta"])
     audio, _ = Instrument("violin", seed=0).render(
-        _stroke(string, 1.0 / n, True, beta=beta, force=const.reference_force))
+        _stroke(string, 1.0 / n, True, beta=beta, force=harm["force"] * const.reference_force))
     f_open = 440.0 * 2.0 ** ((const.midi_pitch - 69) / 12.0)
     return audio[int(0.5 * SR):int((STROKE - 0.1) * SR)].astype(np.float64), f_open
 
@@ -198,3 +199,18 @@ def test_musicxml_diamonds_become_touching_rows_at_the_node(tmp_path):
 ])
 def test_natural_node_chooses_the_lowest_harmonic(pitch, string, expect):
     assert natural_node(pitch, (55.0, 62.0, 69.0, 76.0), string=string) == expect
+
+
+def test_rendered_diamond_score_sounds_the_harmonics(tmp_path):
+    """End to end (rules, modal engine): each harmonic at its sounding pitch (YIN, 10 cents)."""
+    from pipelines.methods.render import render_score
+
+    out = render_score(_diamond_score(tmp_path / "h.musicxml"), method="rules", seed=0)
+    audio = out.audio.astype(np.float64)
+    events = out.parts[0].events
+    for (t0, end), midi in zip(events[["t0", "end"]].to_numpy()[:4], (74, 79, 88, 81),
+                               strict=True):
+        target = 440.0 * 2.0 ** ((midi - 69) / 12.0)
+        seg = audio[int((t0 + 0.15) * SR):int((end - 0.05) * SR)]
+        f0 = librosa.yin(seg, fmin=target / 1.5, fmax=target * 1.5, sr=SR, frame_length=2048)
+        assert abs(1200.0 * np.log2(np.median(f0) / target)) <= 10.0

@@ -237,6 +237,8 @@ def _force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float) -> np.
         force = force * tech["col_legno_force"]
     if len(e.strings) > 1:
         force = force * art["double_stop_force"]
+    if e.touch:
+        force = force * config["harmonics"]["force"]
     if e.accent != 1.0:
         decay = np.clip(1.0 - (t - e.t0) / art["accent_time"], 0.0, 1.0)
         force = force * (1.0 + (e.accent - 1.0) * decay)
@@ -255,8 +257,9 @@ def _beta(e: Event, t: np.ndarray, config: dict[str, Any]) -> np.ndarray:
         beta = beta * config["techniques"]["sul_ponticello_beta"]
     elif e.technique == "sul_tasto":
         beta = beta * config["techniques"]["sul_tasto_beta"]
-    if e.touch:  # the same place on the sounding segment (L / n) of a natural harmonic
-        beta = np.maximum(beta / e.node, config["harmonics"]["min_beta"])
+    if e.touch:  # a natural harmonic: the bow's place on the sounding segment (L / n)
+        harm = config["harmonics"]
+        beta = np.maximum(beta * harm["segment_beta"] / e.node, harm["min_beta"])
     return np.clip(beta, 0.02, 0.45)
 
 
