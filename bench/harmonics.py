@@ -7,7 +7,11 @@ the rules do at beta 0.1: beta = 0.1 x ``[harmonics] segment_beta`` / n (at leas
 44.1 kHz, the synthesized body). From 0.5 s to 1.4 s: the pitch (median of librosa's YIN) in
 cents re n times the open string's nominal frequency, and the margin (dB) from the strongest
 partial with a node at the finger (multiples of n) to the strongest without one (partials
-1..3n of the open string). ``--json`` prints one JSON object on stdout. About 10 s."""
+1..3n of the open string). ``--dynamics`` instead reads and renders a violin score of
+diamonds (D5, A5, E5, G4, C4: the D, A, G strings' 2nd, the A string's 3rd, the G
+string's 4th harmonics) at pp, p, mf, f and ff with the rules (seed 0) and gives each
+note's YIN pitch re its sounding pitch and its level (dB RMS). ``--json`` prints one JSON
+object on stdout. About 10 s."""
 
 from __future__ import annotations
 
@@ -59,13 +63,66 @@ def harmonic(string: int, n: int, settings: dict, instrument: str = "violin",
             "margin_db": round(float(db[k % n == 0].max() - db[k % n != 0].max()), 1)}
 
 
+#: Diamond (touching pitch) -> sounding MIDI pitch on the violin.
+DIAMONDS = {"D5": 74, "A5": 81, "E5": 88, "G4": 67, "C4": 79}
+LEVELS = ("pp", "p", "mf", "f", "ff")
+
+
+def dynamics_run(path: Path) -> dict[str, dict[str, float]]:
+    """Render the diamond score at five dynamics; per note: cents and level (dB RMS)."""
+    import librosa
+    from music21 import dynamics, note, stream, tempo
+    from music21 import instrument as m21instrument
+
+    from pipelines.methods.render import render_score
+
+    part = stream.Part(id="P1")
+    part.partName = "Violin"
+    part.insert(0, m21instrument.Violin())
+    for k, level in enumerate(LEVELS):
+        measure = stream.Measure(number=k + 1)
+        if k == 0:
+            measure.insert(0, tempo.MetronomeMark(number=60))
+        measure.insert(0, dynamics.Dynamic(level))
+        for name in DIAMONDS:
+            n = note.Note(name, quarterLength=0.8)
+            n.notehead = "diamond"
+            measure.append(n)
+        part.append(measure)
+    score = stream.Score()
+    score.insert(0, part)
+    score.write("musicxml", fp=str(path))
+    out = render_score(path, method="rules", seed=0)
+    audio = out.audio.astype(np.float64)
+    result = {}
+    for i, (t0, end) in enumerate(out.parts[0].events[["t0", "end"]].to_numpy()):
+        name, midi = list(DIAMONDS.items())[i % len(DIAMONDS)]
+        target = 440.0 * 2.0 ** ((midi - 69) / 12.0)
+        seg = audio[int((t0 + 0.2) * SR):int((end - 0.05) * SR)]
+        f0 = librosa.yin(seg, fmin=target / 1.5, fmax=target * 1.5, sr=SR, frame_length=2048)
+        result[f"{LEVELS[i // len(DIAMONDS)]} {name}"] = {
+            "cents": round(float(1200.0 * np.log2(np.median(f0) / target)), 2),
+            "level_db": round(float(10.0 * np.log10(np.mean(seg**2))), 1)}
+    return result
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--instrument", default="violin", choices=("violin", "viola", "cello"))
     p.add_argument("--segment-beta", type=float, help="override [harmonics] segment_beta")
     p.add_argument("--force", type=float, help="override [harmonics] force")
+    p.add_argument("--dynamics", action="store_true",
+                   help="render a score of diamonds at pp..ff with the rules instead")
     args = p.parse_args(argv)
+    if args.dynamics:
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as tmp:
+            out = dynamics_run(Path(tmp) / "diamonds.musicxml")
+        print(json.dumps(out) if args.json else "\n".join(
+            f"{k}: {v['cents']:+6.2f} cents, {v['level_db']:.1f} dB" for k, v in out.items()))
+        return 0
     settings = dict(load_config()["harmonics"])
     for key in ("segment_beta", "force"):
         if getattr(args, key) is not None:
