@@ -214,3 +214,19 @@ def test_rendered_diamond_score_sounds_the_harmonics(tmp_path):
         seg = audio[int((t0 + 0.15) * SR):int((end - 0.05) * SR)]
         f0 = librosa.yin(seg, fmin=target / 1.5, fmax=target * 1.5, sr=SR, frame_length=2048)
         assert abs(1200.0 * np.log2(np.median(f0) / target)) <= 10.0
+
+
+@pytest.mark.parametrize(("touch", "ratio"), [(False, 1.5), (True, 3.0)])
+def test_block_api_takes_the_touching_finger(touch, ratio):
+    """Instrument.process with BowControl(finger_touch=...): a fifth stopped, a twelfth touched."""
+    from synth.controls import BowControl
+
+    const = load_instrument("violin").strings[2]
+    violin = Instrument("violin", seed=0)
+    beta = 0.1 * 2.5 / 3 if touch else 0.1
+    control = BowControl(0.3, 0.5 * const.reference_force if touch else const.reference_force,
+                         beta, 1.0 / 3.0, finger_touch=touch)
+    blocks = [violin.process(1024, {2: control}, diagnostics=False).audio for _ in range(60)]
+    steady = np.concatenate(blocks)[int(0.5 * SR):].astype(np.float64)
+    f0 = np.median(librosa.yin(steady, fmin=400.0, fmax=2500.0, sr=SR, frame_length=4096))
+    assert abs(1200.0 * np.log2(f0 / (ratio * 440.0))) <= 10.0
