@@ -16,7 +16,7 @@ import pyarrow as pa
 from data_schemas.io import read_frame, read_table, write_table
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
-ACTIONS_VERSION = "1.0"
+ACTIONS_VERSION = "1.1"
 
 ACTIONS = TableSpec(
     name="actions",
@@ -33,7 +33,9 @@ ACTIONS = TableSpec(
                minimum=0, maximum=3),
         Column("finger_ratio", pa.float32(), "1",
                "Fraction of the string length removed by the finger: 0 = open string, "
-               "1 - 2**(-semitones/12) for a stopped note.",
+               "1 - 2**(-semitones/12) for a stopped note; for a touching finger "
+               "(finger_touch) its distance from the nut / the string length (1/n at the "
+               "n-th natural harmonic's node).",
                minimum=0.0, maximum=0.8),
         Column("bow_force", pa.float64(), "N", "Normal force of the bow on the string.",
                minimum=0.0, maximum=50.0),
@@ -41,7 +43,8 @@ ACTIONS = TableSpec(
                "Bow velocity across the string, + = down-bow, - = up-bow.",
                minimum=-5.0, maximum=5.0),
         Column("beta", pa.float64(), "1",
-               "Bow-bridge distance divided by the effective (bridge to finger) string length.",
+               "Bow-bridge distance divided by the vibrating string length: bridge to a "
+               "stopping finger, or the whole string when the finger only touches it.",
                minimum=0.0, maximum=0.5, exclusive_minimum=True, exclusive_maximum=True),
         Column("bow_position", pa.float64(), "1",
                "Contact point along the bow hair, 0 = frog, 1 = tip.",
@@ -49,6 +52,11 @@ ACTIONS = TableSpec(
         Column("pluck", pa.bool_(), "",
                "A pluck (pizzicato) starts at this time on this string; the row's bow_force "
                "sets its strength (pull of bow_force x 5 mm/N; 0 = 5 mm)."),
+        Column("finger_touch", pa.bool_(), "",
+               "The finger only touches the string at finger_ratio (a light finger: natural "
+               "harmonics) instead of stopping it; held from this row to the string's next "
+               "row. Null or false = a stopping finger (tables written before 1.1 have no "
+               "such column and load as stopped).", nullable=True, required=False),
     ),
     checks=(non_decreasing("time"),),
 )

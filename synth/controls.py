@@ -29,12 +29,15 @@ class BowControl:
         Bow-bridge distance / effective string length.
     finger_ratio : float
         Fraction of the string length removed by the finger (0 = open).
+    finger_touch : bool
+        The finger only touches the string at ``finger_ratio`` (natural harmonics).
     """
 
     bow_velocity: float
     bow_force: float
     beta: float
     finger_ratio: float = 0.0
+    finger_touch: bool = False
 
 
 @dataclass
@@ -56,7 +59,10 @@ class StringInput:
         How far each pluck pulls the string before letting go (default
         :data:`PLUCK_DISPLACEMENT`).
     steady_contact : bool
-        beta and finger_ratio are the same over the whole run (one kernel call).
+        beta, finger_ratio and finger_touch are the same over the whole run (one kernel
+        call).
+    finger_touch : np.ndarray [shape=(n_sub_blocks,)], bool, optional
+        Per sub-block, the finger only touches the string (None: it stops it throughout).
     """
 
     bow_velocity: np.ndarray
@@ -67,6 +73,7 @@ class StringInput:
     pluck_offsets: tuple[int, ...] = ()
     pluck_pulls: tuple[float, ...] = ()
     steady_contact: bool = False
+    finger_touch: np.ndarray | None = None
 
 
 @dataclass

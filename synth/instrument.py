@@ -197,7 +197,7 @@ class Instrument:
             self._check_string(s)
             new = controls.get(s)
             old = self._held[s]
-            target = new or BowControl(0.0, 0.0, old.beta, old.finger_ratio)
+            target = new or BowControl(0.0, 0.0, old.beta, old.finger_ratio, old.finger_touch)
             _check_control(target, s)
             velocity, force = np.empty(n_internal), np.empty(n_internal)
             contact = np.empty(n_internal, np.int8)
@@ -205,7 +205,8 @@ class Instrument:
                         new is None, velocity, force, contact)
             inputs[s] = StringInput(velocity, force, contact, np.array((target.beta,)),
                                     np.array((target.finger_ratio,)),
-                                    (0,) if s in plucked else (), steady_contact=True)
+                                    (0,) if s in plucked else (), steady_contact=True,
+                                    finger_touch=np.array((target.finger_touch,)))
             self._held[s] = target
         return self._run(n_samples, inputs, track=diagnostics)
 
@@ -259,8 +260,10 @@ class Instrument:
                 total += self._rosin_noise(voice.string.rosin_noise, given.bow_force,
                                            out.slip_velocity)
             held = self._held[s]
+            touch = given.finger_touch
             self._held[s] = BowControl(held.bow_velocity, held.bow_force,
-                                       float(given.beta[-1]), float(given.finger_ratio[-1]))
+                                       float(given.beta[-1]), float(given.finger_ratio[-1]),
+                                       touch is not None and bool(touch[-1]))
             if not track:
                 continue
             if hop:
@@ -310,7 +313,8 @@ class Instrument:
         held = self._held[s]
         zeros = np.zeros(n_samples * self.oversample)
         return StringInput(zeros, zeros, np.zeros(zeros.size, np.int8), np.array((held.beta,)),
-                           np.array((held.finger_ratio,)), steady_contact=True)
+                           np.array((held.finger_ratio,)), steady_contact=True,
+                           finger_touch=np.array((held.finger_touch,)))
 
     def _apply_plucks(self, s: int, given: StringInput, start: int) -> None:
         """Turn every pluck's pull (its own interval, any number per run) into grip samples.
@@ -340,13 +344,17 @@ class Instrument:
 
     def _advance_runs(self, voice: StringVoice, given: StringInput, out: StringOutput) -> None:
         """Call the kernel once per run of sub-blocks sharing beta and finger."""
+        touch = given.finger_touch
         if given.steady_contact or (np.all(given.beta == given.beta[0]) and np.all(
-                given.finger_ratio == given.finger_ratio[0])):
+                given.finger_ratio == given.finger_ratio[0]) and (
+                    touch is None or np.all(touch == touch[0]))):
             voice.advance(given.bow_velocity, given.bow_force, given.contact,
-                          float(given.beta[0]), float(given.finger_ratio[0]), out)
+                          float(given.beta[0]), float(given.finger_ratio[0]), out,
+                          touch=touch is not None and bool(touch[0]))
             return
         per_sub = SUB_BLOCK * self.oversample
-        keys = np.stack([np.round(given.beta / 1e-4), np.round(given.finger_ratio / 1e-5)])
+        keys = np.stack([np.round(given.beta / 1e-4), np.round(given.finger_ratio / 1e-5)]
+                        + ([] if touch is None else [touch.astype(np.float64)]))
         change = np.flatnonzero(np.any(keys[:, 1:] != keys[:, :-1], axis=0)) + 1
         bounds = np.concatenate([[0], change, [keys.shape[1]]])
         n = given.bow_velocity.size
@@ -356,7 +364,8 @@ class Instrument:
                                 out.stick_slip[lo:hi])
             voice.advance(given.bow_velocity[lo:hi], given.bow_force[lo:hi],
                           given.contact[lo:hi], float(given.beta[a]),
-                          float(given.finger_ratio[a]), view)
+                          float(given.finger_ratio[a]), view,
+                          touch=touch is not None and bool(touch[a]))
 
 
 def _control_ranges() -> tuple[tuple[str, float, float, bool, bool, str], ...]:

@@ -175,20 +175,28 @@ class ContactCoefficients:
 
 
 def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float,
-                         n_torsion: int = 0) -> ContactCoefficients:
+                         n_torsion: int = 0, *, touch: bool = False) -> ContactCoefficients:
     """Precompute the bow and finger contact coefficients.
+
+    The finger sits at ``length * (1 - finger_ratio)`` from the bridge. A stopping finger
+    shortens the vibrating length to that distance; a touching one (``touch``, natural
+    harmonics) leaves the whole string vibrating, so beta refers to the whole length. The
+    two differ only in the finger's spring-damper, which the caller packs
+    (:func:`synth.modal_kernel.pack_finger_spring`).
 
     Parameters
     ----------
     basis : ModeBasis
         Modes of the string.
     beta : float
-        Bow-bridge distance / effective string length, 0 < beta < 0.5.
+        Bow-bridge distance / vibrating string length, 0 < beta < 0.5.
     finger_ratio : float
-        Fraction of the string length removed by the finger (0 = open string).
+        The finger's distance from the nut / the string length (0 = open string).
     n_torsion : int
         Torsional modes coupled at the bow (:func:`synth.torsion.torsion_mode_count`); their
         surface velocity adds to the bow-point velocity, so to ``H_bb``.
+    touch : bool
+        The finger only touches the string (light finger).
 
     Returns
     -------
@@ -200,10 +208,11 @@ def contact_coefficients(basis: ModeBasis, beta: float, finger_ratio: float,
         unit bow and finger force.
     """
     length = basis.string.length
-    effective = length * (1.0 - finger_ratio)
+    finger_at = length * (1.0 - finger_ratio)
+    effective = length if touch else finger_at
     phi_b = basis.shape(beta * effective)
     fingered = finger_ratio > 0.0
-    phi_f = basis.shape(effective) if fingered else np.zeros_like(phi_b)
+    phi_f = basis.shape(finger_at) if fingered else np.zeros_like(phi_b)
     g, h = basis.force_to_displacement, basis.force_to_velocity
     c_aa, c_av, c_va, c_vv = basis.free
     push_b = np.stack([(c_aa * g + c_av * h) * phi_b, (c_va * g + c_vv * h) * phi_b])

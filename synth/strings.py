@@ -48,6 +48,10 @@ class StringConstants:
         Modal decay rates ``r_n = b1 + b2 (f_n / f_1 - 1)**2``.
     finger_stiffness : float, N/m
     finger_damping : float, N s/m
+        The stopping finger's spring-damper.
+    touch_stiffness : float, N/m
+    touch_damping : float, N s/m
+        The touching (light) finger's spring-damper, at natural harmonics.
     reference_force : float, N
         Middle of the model's Helmholtz force range at beta 0.1 and 0.3 m/s.
     bowed_pitch_offset_cents : float, cents
@@ -84,6 +88,8 @@ class StringConstants:
     damping_b2: float
     finger_stiffness: float
     finger_damping: float
+    touch_stiffness: float = 0.0
+    touch_damping: float = 0.0
     reference_force: float = 1.0
     bowed_pitch_offset_cents: float = 0.0
     torsion_frequency_ratio: float = 0.0
@@ -139,7 +145,8 @@ def _config_path() -> Path:
 
 TUNINGS = ("bowed", "first_mode", "published")
 #: Keys of ``[defaults]`` that every string takes unless it sets its own.
-PER_STRING_DEFAULTS = ("finger_stiffness", "finger_damping", "damping_b1", "damping_b2",
+PER_STRING_DEFAULTS = ("finger_stiffness", "finger_damping", "touch_stiffness",
+                       "touch_damping", "damping_b1", "damping_b2",
                        "torsion_frequency_ratio", "torsion_impedance_ratio", "torsion_q",
                        "friction_model", "rosin_heat", "rosin_cooling_time", "rosin_noise")
 

@@ -3,7 +3,9 @@
 Rows are control frames per string; continuous columns are interpolated linearly between
 rows of the same string (at a repeated time the later row wins, so steps are exact). A
 string is bowed from its first row to its last and where ``bow_force > 0``; after its last
-row the bow is lifted and the string rings on. ``pluck`` rows start a pluck whose strength
+row the bow is lifted and the string rings on. ``finger_touch`` (a light finger at
+``finger_ratio``, natural harmonics) is held from its row to the string's next row (null =
+stopped). ``pluck`` rows start a pluck whose strength
 is the row's ``bow_force``: the string is pulled ``bow_force`` x 1 mm/N and let go at the row's
 time (0 N: the default 1 mm; the pull starts 10 ms per mm before).
 """
@@ -55,6 +57,7 @@ class StringTrack:
     finger_ratio: np.ndarray
     pluck_times: np.ndarray  # when each pull starts, s (it lets go at its row's time)
     pluck_forces: np.ndarray
+    finger_touch: np.ndarray | None = None  # per row (None: no row touches)
 
     @classmethod
     def from_columns(cls, columns: dict[str, np.ndarray]) -> StringTrack:
@@ -71,14 +74,26 @@ class StringTrack:
         # let go at the row's time.
         bow_force = np.where(pluck, 0.0, columns["bow_force"]).astype(np.float64)
         starts = columns["time"][pluck].astype(np.float64) - pluck_pull(strength) / PLUCK_SPEED
+        touch = columns.get("finger_touch")
+        touch = None if touch is None or not np.any(touch) else touch.astype(bool)
         return cls(time, columns["bow_velocity"].astype(np.float64), bow_force,
                    columns["beta"].astype(np.float64),
                    columns["finger_ratio"].astype(np.float64), np.maximum(starts, 0.0),
-                   strength)
+                   strength, touch)
 
     def sample(self, column: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Linear interpolation of ``column`` at times ``t`` (held beyond the ends)."""
         return np.interp(t, self.time, column)
+
+    def touching(self, t: np.ndarray) -> np.ndarray | None:
+        """``finger_touch`` at times ``t``: the latest row's at or before each.
+
+        Before the first row, the first row's; None when no row touches.
+        """
+        if self.finger_touch is None:
+            return None
+        k = np.searchsorted(self.time, t, side="right") - 1
+        return self.finger_touch[np.clip(k, 0, None)]
 
     def inputs(self, start: int, n_out: int, inst: Any) -> StringInput:
         """Controls for output samples ``start .. start + n_out``."""
@@ -94,7 +109,8 @@ class StringTrack:
         offsets = tuple(int(round((p - lo) * inst.internal_rate)) for p in self.pluck_times[now])
         pulls = tuple(float(p) for p in pluck_pull(self.pluck_forces[now]))
         return StringInput(velocity, force, contact, self.sample(self.beta, t_sub),
-                           self.sample(self.finger_ratio, t_sub), offsets, pulls)
+                           self.sample(self.finger_ratio, t_sub), offsets, pulls,
+                           finger_touch=self.touching(t_sub))
 
 
 def play_actions(inst: Any, actions: pd.DataFrame, *, tail: float = DEFAULT_TAIL,
@@ -130,6 +146,7 @@ def play_actions(inst: Any, actions: pd.DataFrame, *, tail: float = DEFAULT_TAIL
                              f"strings 0..{inst.n_strings - 1}")
     columns = {c: actions[c].to_numpy() for c in ("time", "bow_velocity", "bow_force",
                                                   "beta", "finger_ratio", "pluck")}
+    columns["finger_touch"] = actions["finger_touch"].eq(True).to_numpy()
     order = np.argsort(strings, kind="stable")  # rows of each string, in table order
     tracks = {}
     for s in np.unique(strings):

@@ -102,7 +102,8 @@ class StringVoice:
             model=FRICTION_MODELS[string.friction_model], rosin_heat=string.rosin_heat,
             rosin_cooling_time=string.rosin_cooling_time, sample_rate=internal_rate)
         self.finger_spring = pack_finger_spring(string.finger_stiffness, string.finger_damping)
-        self._cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, bool]] = {}
+        self.touch_spring = pack_finger_spring(string.touch_stiffness, string.touch_damping)
+        self._cache: dict[tuple[int, int, bool], tuple[np.ndarray, np.ndarray, bool]] = {}
         self._noise = np.zeros(0)
         self._noise_used = np.zeros(1, np.int64)
         self.excited = False
@@ -113,15 +114,20 @@ class StringVoice:
         self.carried[:] = 0.0
         self.excited = False
 
-    def coefficients(self, beta: float, finger_ratio: float):
-        """Packed kernel coefficients, contact gains and finger flag for a contact setting."""
-        key = (round(beta / BETA_RESOLUTION), round(finger_ratio / FINGER_RESOLUTION))
+    def coefficients(self, beta: float, finger_ratio: float, touch: bool = False):
+        """Packed kernel coefficients, contact gains and finger flag for a contact setting.
+
+        ``touch``: the finger only touches the string (see :func:`contact_coefficients`).
+        """
+        key = (round(beta / BETA_RESOLUTION), round(finger_ratio / FINGER_RESOLUTION),
+               bool(touch))
         hit = self._cache.get(key)
         if hit is None:
             if len(self._cache) >= _CACHE_SIZE:
                 self._cache.clear()
             coeffs = contact_coefficients(self.basis, key[0] * BETA_RESOLUTION,
-                                          key[1] * FINGER_RESOLUTION, self.n_torsion)
+                                          key[1] * FINGER_RESOLUTION, self.n_torsion,
+                                          touch=key[2])
             hit = (pack_coefficients(self.basis, coeffs), coeffs.gains, coeffs.fingered)
             self._cache[key] = hit
         return hit
@@ -137,7 +143,8 @@ class StringVoice:
         self._noise_used[0] = 0
 
     def advance(self, bow_velocity: np.ndarray, bow_force: np.ndarray, contact: np.ndarray,
-                beta: float, finger_ratio: float, out: StringOutput) -> None:
+                beta: float, finger_ratio: float, out: StringOutput,
+                touch: bool = False) -> None:
         """Advance by ``bow_velocity.size`` samples at fixed beta and finger, writing ``out``.
 
         Parameters
@@ -151,6 +158,9 @@ class StringVoice:
         finger_ratio : float
         out : StringOutput
             Views of length n to write into.
+        touch : bool
+            The finger only touches the string at ``finger_ratio`` (light finger, with the
+            string's touch spring-damper); beta then refers to the whole string.
         """
         if not self.excited and not contact.any():
             out.bridge_force[:] = 0.0
@@ -158,12 +168,13 @@ class StringVoice:
             out.stick_slip[:] = 0
             return
         self.excited = True
-        packed, gains, fingered = self.coefficients(beta, finger_ratio)
+        packed, gains, fingered = self.coefficients(beta, finger_ratio, touch)
+        spring = self.touch_spring if touch else self.finger_spring
         n = bow_velocity.size
         done = 0
         while True:
             done += advance_string(self.state, self.carried, packed, self.n_bridge, gains,
-                                   self.finger_spring, self.friction, fingered,
+                                   spring, self.friction, fingered,
                                    bow_velocity[done:], bow_force[done:], contact[done:],
                                    self._noise, self._noise_used, out.bridge_force[done:],
                                    out.slip_velocity[done:], out.stick_slip[done:])

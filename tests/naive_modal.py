@@ -13,16 +13,19 @@ from synth.torsion import torsion_modes
 
 
 def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocity, bow_force,
-                 contact, rng, *, n_torsion=0, thermal=None):
+                 contact, rng, *, n_torsion=0, thermal=None, touch=False):
     """Return (bridge force, slip velocity, stick-slip state) per sample, like the kernel.
 
     ``rng`` gives one uniform draw of friction noise per slipping sample, in order.
     ``n_torsion`` torsional modes (on the stopped length, read at the bow) add their surface
     velocity to the bow point's; ``thermal = (rosin_heat J, cooling time s)`` replaces the
-    hyperbolic curve by rosin friction that falls as the contact heats.
+    hyperbolic curve by rosin friction that falls as the contact heats. ``touch``: the
+    finger (at ``length * (1 - finger_ratio)`` from the bridge) only touches the string,
+    which keeps its whole length (beta and torsion on the whole string).
     """
     length = basis.string.length
-    effective = length * (1.0 - finger_ratio)
+    finger_at = length * (1.0 - finger_ratio)
+    effective = length if touch else finger_at
     tors = torsion_modes(basis.string, effective, beta * effective, basis.sample_rate,
                          basis.frequency_limit, n_torsion)
     t_aa, t_av, t_va, t_vv = tors.free
@@ -32,7 +35,7 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
     step = 1.0 / basis.sample_rate
     phi_b = basis.shape(beta * effective)
     fingered = finger_ratio > 0
-    phi_f = basis.shape(effective) if fingered else np.zeros_like(phi_b)
+    phi_f = basis.shape(finger_at) if fingered else np.zeros_like(phi_b)
     c_aa, c_av, c_va, c_vv = basis.free
     g, h = basis.force_to_displacement, basis.force_to_velocity
     mu_s, mu_d, v0_nominal, depth = friction

@@ -25,14 +25,15 @@ N = 2000
 
 
 def run_kernel(basis, string, beta, finger_ratio, velocity, force, contact, rng, *,
-               n_torsion=0, thermal=None):
-    coeffs = contact_coefficients(basis, beta, finger_ratio, n_torsion)
+               n_torsion=0, thermal=None, touch=False):
+    coeffs = contact_coefficients(basis, beta, finger_ratio, n_torsion, touch=touch)
     packed = pack_coefficients(basis, coeffs)
     state = kernel_state(basis, n_torsion)
     carried = np.zeros(N_CARRIED)
     out = empty_outputs(velocity.size)
     friction = friction_of(string, thermal, basis.sample_rate)
-    spring = np.array([string.finger_stiffness, string.finger_damping])
+    spring = np.array([string.touch_stiffness, string.touch_damping] if touch
+                      else [string.finger_stiffness, string.finger_damping])
     advance_string(state, carried, packed, bridge_mode_count(basis), coeffs.gains, spring,
                    friction, coeffs.fingered, velocity, force, contact,
                    rng.random(velocity.size), np.zeros(1, np.int64), *out)
@@ -95,6 +96,35 @@ def test_torsion_and_thermal_friction_match_the_numpy_twin(string_index, finger_
     scale = np.abs(twin[0]).max()
     np.testing.assert_allclose(kernel[0], twin[0], rtol=0, atol=1e-9 * max(scale, 1.0))
     np.testing.assert_allclose(kernel[1], twin[1], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize(("string_index", "node", "n_torsion"), [(1, 3, 0), (2, 2, 12)])
+def test_touching_finger_matches_the_numpy_twin(string_index, node, n_torsion):
+    """A light finger at 1/n from the nut (whole string, touch spring): kernel == twin."""
+    import dataclasses
+
+    string = load_instrument("violin").strings[string_index]
+    if n_torsion:
+        string = dataclasses.replace(string, torsion_frequency_ratio=4.0)
+    basis = mode_basis(string, 88200.0, max_frequency=20000.0)
+    velocity = np.linspace(0.0, 0.4, N)
+    force = np.full(N, string.reference_force)
+    contact = np.ones(N, np.int8)
+    contact[:50] = 0
+    beta = 0.1 / node
+    kernel = run_kernel(basis, string, beta, 1.0 / node, velocity, force, contact,
+                        np.random.default_rng(5), n_torsion=n_torsion, touch=True)
+    twin = naive_string(basis, beta, 1.0 / node, (string.mu_s, string.mu_d, string.v0, 0.02),
+                        (string.touch_stiffness, string.touch_damping), velocity, force,
+                        contact, np.random.default_rng(5), n_torsion=n_torsion, touch=True)
+    stopped = run_kernel(basis, string, beta, 1.0 / node, velocity, force, contact,
+                         np.random.default_rng(5), n_torsion=n_torsion)
+    assert set(np.unique(kernel[2])) >= {1, 2}, "the run must both stick and slip"
+    np.testing.assert_array_equal(kernel[2], twin[2])
+    scale = np.abs(twin[0]).max()
+    np.testing.assert_allclose(kernel[0], twin[0], rtol=0, atol=1e-9 * max(scale, 1.0))
+    np.testing.assert_allclose(kernel[1], twin[1], rtol=0, atol=1e-9)
+    assert np.abs(kernel[0] - stopped[0]).max() > 0.1 * scale  # touching is not stopping
 
 
 def test_torsion_takes_part_of_the_bow_force_but_not_the_bridge():

@@ -100,6 +100,7 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
     "ornaments": {"trill_subdivision": 32.0, "trill_min_rate": 30.0, "trill_max_rate": 30.0,
                   "ornament_note": 0.5, "appoggiatura_share": 0.9, "shift_interval": 24.0,
                   "portamento_time": 0.5},
+    "harmonics": {"highest_node": 12.0, "min_beta": 0.2, "segment_beta": 4.0, "force": 2.0},
 }
 
 
@@ -177,6 +178,12 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
             raise ParameterError(f"{source}: bow_regions.{key}={value!r} must be in [0, 1]")
     _validate_expression(config, source)
     _validate_loudness(config, source)
+    for key in ("min_beta", "segment_beta", "force"):
+        _positive(config, "harmonics", key, source)
+    node = config["harmonics"]["highest_node"]
+    if not isinstance(node, int) or isinstance(node, bool) or not 2 <= node <= 12:
+        raise ParameterError(f"{source}: harmonics.highest_node={node!r} must be a whole "
+                             "number from 2 to 12")
     for key in ("pitch_sigma", "onset_sigma"):
         _numbers(config["skill"][key], f"skill.{key} (levels 0..3)", 4, ">= 0",
                  _upper("skill", key), source)

@@ -19,7 +19,9 @@ class Event:
     strings; ``roll`` lists (string, semitones) of lower chord notes played briefly first;
     ``semitones`` include the note's intonation offset, ``vibrato`` is its finger's
     vibrato (:mod:`pipelines.perform.expression`) and ``ornament`` its trill, mordent or
-    turn (:mod:`pipelines.perform.ornaments`).
+    turn (:mod:`pipelines.perform.ornaments`). ``touch``: a natural harmonic, the finger
+    only touches its string at the ``node``-th harmonic's node (``semitones`` is that point,
+    :mod:`pipelines.perform.harmonics`).
     """
 
     rows: list[int]
@@ -50,6 +52,8 @@ class Event:
     run_position: str = "iso"
     vibrato: Vibrato | None = None
     ornament: Ornament | None = None
+    touch: bool = False
+    node: int = 0
 
 
 @dataclass

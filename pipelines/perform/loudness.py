@@ -123,7 +123,7 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     ----------
     events : list of Event
         Events of one part (changed in place: ``dynamic`` and ``dynamic_next`` become the
-        bowed levels; pizzicato events are left alone).
+        bowed levels; pizzicato events and natural harmonics are left alone).
     instrument : str
     config : dict
         Rules configuration (``[loudness]``: ``enabled``, ``mf``, ``level_db``,
@@ -146,7 +146,7 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     cal = Calibration(table, instrument)
     short = 0
     for e in events:
-        if e.pizz:
+        if e.pizz or e.touch:  # calibrated on stopped notes: harmonics keep their marking
             continue
         marked, marked_next = e.dynamic, e.dynamic_next
         e.dynamic, miss = bowed_level(cal, e.strings, e.semitones, target(config, marked),

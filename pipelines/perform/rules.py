@@ -28,6 +28,7 @@ from data_schemas.instruments import instrument_facts
 from pipelines.perform.ear import correct_by_ear
 from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.expression import assign_vibrato, intonation_cents
+from pipelines.perform.harmonics import place_natural_harmonics
 from pipelines.perform.instruments import choose_strings, fit_range
 from pipelines.perform.loudness import even_out
 from pipelines.perform.ornaments import assign_ornaments, assign_portamenti, time_graces
@@ -129,7 +130,10 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     onset = warp(notes["onset"].to_numpy())
     end = warp((notes["onset"] + notes["duration"]).to_numpy())
     semis = strings["semitones"].to_numpy().astype(np.float64)
-    stopped = semis > 1e-6
+    touch = (strings["touch"].to_numpy(bool) if "touch" in strings
+             else np.zeros(semis.size, bool))
+    node = strings["node"].to_numpy() if "node" in strings else np.zeros(semis.size, int)
+    stopped = (semis > 1e-6) & ~touch  # a touching finger has no intonation of its own
     cents = intonation_cents(notes["midi_pitch"].to_numpy(), onset, stopped, config, skill, rng)
     semis[stopped] = np.maximum(semis[stopped] + cents[stopped] / 100.0, 0.05)
     key = notes["onset_beats"].round(6).astype(str) + notes["grace"].astype(str)
@@ -141,7 +145,10 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     for code in range(codes.max() + 1):
         rows = np.flatnonzero(codes == code)
         rows = rows[np.argsort(cols["midi_pitch"][rows], kind="stable")]
-        events.append(_event(rows, cols, st, semis, rolled, onset, end))
+        event = _event(rows, cols, st, semis, rolled, onset, end)
+        event.touch = bool(touch[rows].all())
+        event.node = int(node[rows[0]]) if event.touch else 0
+        events.append(event)
     events = _merge_ties(events, cols)
     time_graces(events, cols, config)
     onset_sigma = config["skill"]["onset_sigma"][skill]
@@ -155,6 +162,9 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     assign_vibrato(events, config, rng)
     assign_ornaments(events, cols, config)
     assign_portamenti(events, config)
+    for e in events:  # a touching finger keeps still: no vibrato, ornament or glide
+        if e.touch:
+            e.vibrato = e.ornament = None
     return events
 
 
@@ -299,11 +309,12 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
                    instrument: str | None = None, skill: int = 3,
                    rng: np.random.Generator | None = None,
                    warp: Callable[[np.ndarray], np.ndarray] | None = None,
-                   transpose_octaves: bool = False,
+                   transpose_octaves: bool = False, warnings: list[str] | None = None,
                    ) -> tuple[str, pd.DataFrame, pd.DataFrame, list]:
     """The front end every method shares: order, fold into range, choose strings, time.
 
-    Parameters are those of :func:`perform_part`.
+    Parameters are those of :func:`perform_part`; ``warnings`` receives what could not be
+    played as written (natural harmonics played stopped).
 
     Returns
     -------
@@ -311,7 +322,8 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
     notes : pandas.DataFrame
         The part's notes in playing order, folded into range.
     strings : pandas.DataFrame
-        String and finger per note (:func:`pipelines.perform.instruments.choose_strings`).
+        String and finger per note (:func:`pipelines.perform.instruments.choose_strings`,
+        natural harmonics placed by :func:`pipelines.perform.harmonics.place_natural_harmonics`).
     events : list of Event
         Played events (:func:`build_events`).
     """
@@ -321,6 +333,7 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
                               ascending=[True, False, True], kind="stable")
     notes = fit_range(notes.reset_index(drop=True), inst, transpose_octaves=transpose_octaves)
     strings = choose_strings(notes, inst)
+    strings = place_natural_harmonics(notes, strings, inst.open_strings, config, warnings)
     if warp is None:
         warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
     events = build_events(notes, strings, config, warp=warp, skill=skill, rng=rng)
@@ -363,11 +376,11 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         from data_schemas.errors import ParameterError
 
         raise ParameterError(f"skill={skill!r} must be 0, 1, 2 or 3")
+    warnings: list[str] = []
     name, notes, strings, events = prepare_events(
         notes, config, instrument=instrument, skill=skill, rng=rng, warp=warp,
-        transpose_octaves=transpose_octaves)
+        transpose_octaves=transpose_octaves, warnings=warnings)
     inst_cfg = config["instruments"][name]
-    warnings: list[str] = []
     even_out(events, name, config, warnings)  # the marked dynamic -> the bowed lane level
     correct_by_ear(events, name, config, warnings)  # fingers where the notes sound in tune
     if strings["rolled"].any():

@@ -185,8 +185,28 @@ def harmonic_pitch(written: list[float], diamonds: list[bool],
             return written[0] + TOUCH_TO_SOUNDING[gap], "artificial"
         return None
     if len(written) == 1 and diamonds[0]:
-        for gap, above in TOUCH_TO_SOUNDING.items():  # the lowest node first (octave)
-            for open_pitch in open_strings:
-                if int(round(written[0] - open_pitch)) == gap:
-                    return open_pitch + above, "natural"
+        string = touched_string(written[0], open_strings)
+        if string is not None:
+            open_pitch = open_strings[string]
+            return open_pitch + TOUCH_TO_SOUNDING[int(round(written[0] - open_pitch))], "natural"
+    return None
+
+
+def touched_string(written: float, open_strings: tuple[float, ...]) -> int | None:
+    """The open string (index, 0 = lowest) a natural harmonic's touching pitch lies on.
+
+    The lowest node first (the octave, then the fifth above it, ...), the lowest string
+    first; None when the pitch is at no node of :data:`TOUCH_TO_SOUNDING`.
+
+    Examples
+    --------
+    >>> touched_string(74.0, (55.0, 62.0, 69.0, 76.0)), touched_string(60.0, (55.0, 62.0))
+    (1, 0)
+    >>> touched_string(63.0, (55.0, 62.0, 69.0, 76.0)) is None
+    True
+    """
+    for gap in TOUCH_TO_SOUNDING:
+        for i, open_pitch in enumerate(open_strings):
+            if int(round(written - open_pitch)) == gap:
+                return i
     return None

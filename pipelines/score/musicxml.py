@@ -19,6 +19,7 @@ from pipelines.score.marks import (
     is_reported,
     mark_kind,
     ornament_flags,
+    touched_string,
 )
 from pipelines.score.tempo import TempoMap
 from pipelines.score.text import classify, tempo_from_words
@@ -302,7 +303,7 @@ def _add_note(raw: RawPart, el, beat: float, measure: int, voice: int,
     members = list(el.notes) if "Chord" in el.classSet else [el]
     pitched = sorted(((n.pitch.ps, n) for n in members), key=lambda p: p[0])
     if flags.get("harmonic") or any(getattr(n, "notehead", "") == "diamond" for _, n in pitched):
-        pitched = _sounding(pitched, flags, raw)
+        pitched = _sounding(pitched, flags, raw, state)
     state.where[id(el)] = (beat, voice, duration)
     state.located[id(el)] = (measure, state.movement)
     for k, (ps, n) in enumerate(pitched):
@@ -360,8 +361,14 @@ def _note_flags(raw: RawPart, el, state: _PartState) -> dict[str, object]:
     return flags
 
 
-def _sounding(pitched: list, flags: dict[str, object], raw: RawPart) -> list:
-    """A harmonic sounds at its sounding pitch: an artificial one is one note, not two."""
+def _sounding(pitched: list, flags: dict[str, object], raw: RawPart, state: _PartState) -> list:
+    """A harmonic sounds at its sounding pitch: an artificial one is one note, not two.
+
+    A natural harmonic notated at its touching pitch (a diamond) names its string (as a
+    string indication, unless the score gives one); an artificial one is reported: it is
+    played stopped at its sounding pitch (a stopping and a touching finger at once are not
+    modelled).
+    """
     from data_schemas.instruments import instrument_facts
     from pipelines.perform.instruments import guess_instrument
 
@@ -376,6 +383,10 @@ def _sounding(pitched: list, flags: dict[str, object], raw: RawPart) -> list:
         return pitched
     midi, kind = found
     flags["harmonic_type"] = kind
+    if kind == "natural":
+        flags.setdefault("string_indication", touched_string(written[0], opens))
+    else:
+        state.report(raw, "artificial harmonic", "played stopped at its sounding pitch")
     return [(midi, pitched[0][1])]
 
 
