@@ -51,7 +51,7 @@ ACTIONS = TableSpec(
                minimum=0.0, maximum=1.0),
         Column("pluck", pa.bool_(), "",
                "A pluck (pizzicato) starts at this time on this string; the row's bow_force "
-               "sets its strength (pull of bow_force x 5 mm/N; 0 = 5 mm)."),
+               "sets its strength (pull of bow_force x 1 mm/N; 0 = 1 mm, synth.controls)."),
         Column("finger_touch", pa.bool_(), "",
                "The finger only touches the string at finger_ratio (a light finger: natural "
                "harmonics) instead of stopping it; held from this row to the string's next "

@@ -59,9 +59,13 @@ def test_fingers_move_by_the_measured_error_and_open_strings_stay(monkeypatch):
 
     table = _table(lambda s, q, lv: 2.0 * q + lv)  # cents
     monkeypatch.setattr(ear, "load_pitch_calibration", lambda path=None: table)
-    events = [_event([1, 2], [12.0, 0.0], dynamic=3.0), _event([0], [7.0], pizz=True)]
+    harmonic = _event([1], [12.0])
+    harmonic.touch = True
+    events = [_event([1, 2], [12.0, 0.0], dynamic=3.0), _event([0], [7.0], pizz=True),
+              harmonic]
     moved = correct_by_ear(events, "violin", load_config())
     assert moved == 2
+    assert harmonic.semitones == [12.0]  # a touching finger stays on its node
     assert events[0].semitones == [pytest.approx(12.0 - 0.27), 0.0]  # 2*12 + 3 cents sharp
     assert events[1].semitones == [pytest.approx(7.0 - 0.19)]  # pizzicato: at mf
     config = load_config()

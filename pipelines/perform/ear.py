@@ -81,7 +81,8 @@ def correct_by_ear(events: list, instrument: str, config: dict[str, Any],
     events : list of Event
         Events of one part, after :func:`pipelines.perform.loudness.even_out` (their
         ``dynamic`` is the bowed lane level); ``semitones`` (and rolled notes' positions)
-        change in place. Pizzicato notes are corrected at mf.
+        change in place. Pizzicato notes are corrected at mf; natural harmonics (a
+        touching finger at a node) are left alone.
     instrument : str
     config : dict
         Rules configuration (``[intonation] by_ear``).
@@ -104,6 +105,8 @@ def correct_by_ear(events: list, instrument: str, config: dict[str, Any],
     cal = PitchCalibration(table, instrument)
     moved = 0
     for e in events:
+        if e.touch:  # a natural harmonic: the touching finger stays on its node
+            continue
         level = 5.0 if e.pizz else float(e.dynamic)
         e.semitones = [_placed(cal, s, q, level) for s, q in zip(e.strings, e.semitones,
                                                                   strict=True)]
