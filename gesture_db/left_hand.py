@@ -1,0 +1,357 @@
+"""The left hand as a gesture: describe a note's pitch contour, and play a description back.
+
+A recording's left-hand contour is ``pitch_deviation_cents`` (cents from the nominal pitch of
+the note being played, :data:`data_schemas.recording.RECORDING`). A vibrato is an
+oscillation, which a few Bezier segments cannot follow; so each note's contour is turned
+into a slowly varying *description* that they can (:func:`describe_left_hand`), laid out as
+:data:`LEFT_HAND_LAYOUT` (:data:`LEFT_HAND_DIM` numbers):
+
+- ``intonation`` (cents): the median of the contour's centre line (below);
+- ``onset_delay`` (s): when the vibrato starts (the first zero crossing of a kept
+  half-cycle; the note's duration when it has none);
+- ``glide_time`` (s): the span at the note's end where the finger already slides to the
+  next note (a shift's portamento), 0 without one;
+- ``extent`` (cents, peak): the vibrato extent envelope from the onset to the note's end,
+  2 cubic Bezier segments (:func:`gesture_db.bezier.fit_segments`, 9 numbers);
+- ``rate`` (Hz): the vibrato rate envelope over the same span, 1 cubic Bezier segment
+  (5 numbers).
+
+The extraction method: (1) the glide is the trailing run of frames more than
+:data:`GLIDE_CENTS` from the median of the note's first 80 %; the rest is the body; (2) the
+body is smoothed by a 25 ms moving average (sensor noise; the peaks are divided by its gain
+at the note's rate); (3) a first centre line is its
+moving average over one period of a :data:`DEFAULT_RATE` vibrato, whose zero crossings give
+a first rate; the centre line is then the moving average over one period of that rate
+(which cancels a sine of that rate); (4) the oscillation (body minus centre) is cut at its
+zero crossings into half-cycles; those whose peak reaches :data:`MIN_EXTENT` cents and
+:data:`RELATIVE_EXTENT` of the median such peak are the vibrato (the longest stretch of
+consecutive ones): their peaks, at their middles, give the extent envelope (held before the first and
+after the last), and each pair of half-cycles (one cycle) gives a rate at its middle (the first and last
+cycles left out when there are four or more); the
+envelopes are sampled on the frames from the onset to the end and fitted with Bezier segments. A note with
+fewer than :data:`MIN_HALF_CYCLES` kept half-cycles has no vibrato (extent 0, rate
+:data:`DEFAULT_RATE`, onset delay = its duration).
+
+:func:`left_hand_cents` plays a description back over a target note of another duration:
+the onset delay is kept in seconds (scaled down on a shorter note), the envelopes are
+stretched over the rest, and the vibrato is re-synthesised as ``intonation + extent(t)
+sin(phase(t))`` with ``phase`` the integral of the rate, continued from the previous note.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.errors import ParameterError
+from gesture_db.bezier import evaluate_segments, fit_segments
+
+#: Names and lengths of the parts of a left-hand description, in order.
+LEFT_HAND_LAYOUT = (("intonation", 1), ("onset_delay", 1), ("glide_time", 1), ("extent", 9),
+                    ("rate", 5))
+#: Length of a left-hand description.
+LEFT_HAND_DIM = sum(n for _name, n in LEFT_HAND_LAYOUT)
+#: Bezier segments of the extent and rate envelopes.
+EXTENT_SEGMENTS = 2
+RATE_SEGMENTS = 1
+#: Rate (Hz) assumed for the first centre line and given to notes without vibrato.
+DEFAULT_RATE = 5.5
+#: A half-cycle whose peak (cents) reaches this is vibrato.
+MIN_EXTENT = 2.0
+#: ... and this share of the median peak of the note's vibrato half-cycles.
+RELATIVE_EXTENT = 0.4
+#: A note needs this many vibrato half-cycles to have a vibrato.
+MIN_HALF_CYCLES = 3
+#: Frames this far (cents) from the note's median at its end are a glide to the next note.
+GLIDE_CENTS = 45.0
+#: Rates (Hz) a vibrato may have.
+RATE_RANGE = (3.0, 9.0)
+_SMOOTH = 0.025  # s, moving average against sensor noise
+_DENSE = 256  # points an envelope is evaluated on before interpolation
+
+
+def _slices() -> dict[str, slice]:
+    out, k = {}, 0
+    for name, n in LEFT_HAND_LAYOUT:
+        out[name] = slice(k, k + n)
+        k += n
+    return out
+
+
+#: Where each part of :data:`LEFT_HAND_LAYOUT` sits in a description.
+PARTS = _slices()
+
+
+def moving_average(x: np.ndarray, width: int) -> np.ndarray:
+    """Centred moving average over ``width`` frames, the window shrinking at the ends.
+
+    Examples
+    --------
+    >>> moving_average(np.array([0.0, 3.0, 0.0, 3.0]), 3).tolist()
+    [1.5, 1.0, 2.0, 1.5]
+    """
+    x = np.asarray(x, np.float64)
+    width = int(max(width, 1))
+    if width == 1 or x.size == 0:
+        return x.copy()
+    c = np.r_[0.0, np.cumsum(x)]
+    i = np.arange(x.size)
+    lo = np.clip(i - width // 2, 0, x.size)
+    hi = np.clip(i - width // 2 + width, 0, x.size)
+    return (c[hi] - c[lo]) / (hi - lo)
+
+
+def _zero_crossings(y: np.ndarray) -> np.ndarray:
+    """Sub-frame indices where ``y`` changes sign."""
+    s = np.signbit(y)
+    k = np.flatnonzero(s[1:] != s[:-1])
+    return k + y[k] / (y[k] - y[k + 1])
+
+
+def _half_cycles(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Start, end (sub-frame indices) and peak |y| of each half-cycle between zero crossings."""
+    z = _zero_crossings(y)
+    if z.size < 2:
+        return np.zeros(0), np.zeros(0), np.zeros(0)
+    a, b = z[:-1], z[1:]
+    peaks = np.array([np.max(np.abs(y[int(np.ceil(p)):int(np.floor(q)) + 1]), initial=0.0)
+                      for p, q in zip(a, b, strict=True)])
+    return a, b, peaks
+
+
+def _vibrato_cycles(body: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                         np.ndarray]:
+    """Centre line and the kept half-cycles (start, end, peak) of a glide-free body."""
+    xs = moving_average(body, round(_SMOOTH * fs))
+    centre = moving_average(xs, round(fs / DEFAULT_RATE))
+    a, b, peak = _half_cycles(xs - centre)
+    keep = peak >= MIN_EXTENT
+    if keep.sum() >= MIN_HALF_CYCLES:
+        rate0 = float(np.clip(0.5 * fs / np.median(b[keep] - a[keep]), *RATE_RANGE))
+        centre = moving_average(xs, round(fs / rate0))
+        a, b, peak = _half_cycles(xs - centre)
+        keep = peak >= MIN_EXTENT
+        if keep.any():  # the centre line bends where a vibrato starts: not a half-cycle
+            keep &= peak >= RELATIVE_EXTENT * np.median(peak[keep])
+    # keep the longest stretch of consecutive kept half-cycles
+    runs = np.split(np.flatnonzero(keep), np.flatnonzero(np.diff(np.flatnonzero(keep)) > 1)
+                    + 1) if keep.any() else []
+    best = max(runs, key=len) if runs else np.zeros(0, int)
+    return centre, a[best], b[best], peak[best]
+
+
+def describe_left_hand(cents: np.ndarray, frame_rate: float) -> np.ndarray:
+    """The left-hand description of one note's pitch contour (see the module docstring).
+
+    Parameters
+    ----------
+    cents : np.ndarray [shape=(n,)], cents
+        The note's ``pitch_deviation_cents`` frames from its onset to its offset.
+    frame_rate : float, Hz
+        Frames per second.
+
+    Returns
+    -------
+    np.ndarray [shape=(LEFT_HAND_DIM,)]
+
+    Examples
+    --------
+    >>> fs = 240.0
+    >>> t = np.arange(0, 1.0, 1 / fs)
+    >>> x = 5.0 + np.where(t >= 0.2, 12.0 * np.sin(2 * np.pi * 6.0 * (t - 0.2)), 0.0)
+    >>> d = describe_left_hand(x, fs)
+    >>> round(float(d[0])), round(float(d[1]), 1), round(float(mean_extent(d)))
+    (5, 0.2, 12)
+    >>> round(float(mean_rate(d)), 1)
+    6.0
+    """
+    x = np.asarray(cents, np.float64)
+    if frame_rate <= 0 or x.ndim != 1 or not np.isfinite(x).all():
+        raise ParameterError("describe_left_hand needs a finite 1-D contour and a rate > 0")
+    n = x.size
+    fs = float(frame_rate)
+    duration = max(n - 1, 1) / fs
+    if n < 4:
+        return _description(float(np.median(x)) if n else 0.0, duration, 0.0,
+                            np.zeros(2), np.full(2, DEFAULT_RATE))
+    ref = float(np.median(x[:max(int(0.8 * n), 1)]))
+    far = np.abs(x - ref) > GLIDE_CENTS
+    k = n
+    while k > 0 and far[k - 1] and (n - k) < 0.2 * fs:
+        k -= 1
+    glide = (n - k) / fs if n - k >= 2 and k > n // 2 else 0.0
+    body = x[:k] if glide > 0 else x
+    centre, a, b, peak = _vibrato_cycles(body, fs)
+    intonation = float(np.median(centre))
+    if a.size < MIN_HALF_CYCLES:
+        return _description(intonation, duration, glide, np.zeros(n),
+                            np.full(n, DEFAULT_RATE))
+    grid = np.arange(int(np.ceil(a[0])), n, dtype=np.float64)
+    if grid.size < 2:
+        grid = np.array([n - 2.0, n - 1.0])
+    mid = 0.5 * (a + b)
+    extent = np.interp(grid, mid, peak)
+    z = np.r_[a, b[-1]]
+    if z.size >= 6:  # the first and last cycles lean on the bent ends of the centre line
+        z = z[1:-1]
+    if z.size >= 3:
+        rates = fs / (z[2:] - z[:-2])
+        rate = np.interp(grid, 0.5 * (z[2:] + z[:-2]), np.clip(rates, *RATE_RANGE))
+    else:
+        rate = np.full(grid.size, float(np.clip(0.5 * fs / np.median(b - a), *RATE_RANGE)))
+    # undo the smoothing's attenuation of a sine at the note's rate
+    arg = np.pi * float(np.median(rate)) * max(round(_SMOOTH * fs), 1) / fs
+    extent = extent * (arg / np.sin(arg))
+    return _description(intonation, a[0] / fs, glide, extent, rate)
+
+
+def _description(intonation: float, delay: float, glide: float, extent: np.ndarray,
+                 rate: np.ndarray) -> np.ndarray:
+    """Pack the parts, fitting the envelopes (frames of the note) with Bezier segments."""
+    free2 = np.zeros((EXTENT_SEGMENTS, 2), np.int64)
+    free1 = np.zeros((RATE_SEGMENTS, 2), np.int64)
+    ext, _ = fit_segments(np.maximum(extent, 0.0), free2, max_candidates=16)
+    rat, _ = fit_segments(rate, free1, max_candidates=16)
+    return np.r_[intonation, delay, glide, ext, rat]
+
+
+def _envelope(vector: np.ndarray, n_segments: int, x: np.ndarray) -> np.ndarray:
+    """A Bezier envelope at positions ``x`` in [0, 1] of its note."""
+    dense = evaluate_segments(vector, n_segments, _DENSE)
+    return np.interp(np.clip(x, 0.0, 1.0), np.linspace(0.0, 1.0, _DENSE), dense)
+
+
+def mean_extent(description: np.ndarray) -> float:
+    """Mean peak extent (cents) of a description's vibrato after its onset (0 without)."""
+    d = np.asarray(description, np.float64)
+    return float(np.maximum(evaluate_segments(d[PARTS["extent"]], EXTENT_SEGMENTS, _DENSE),
+                            0.0).mean())
+
+
+def mean_rate(description: np.ndarray) -> float:
+    """Mean rate (Hz) of a description's rate envelope."""
+    d = np.asarray(description, np.float64)
+    return float(evaluate_segments(d[PARTS["rate"]], RATE_SEGMENTS, _DENSE).mean())
+
+
+def left_hand_cents(description: np.ndarray, sample_duration: float, target_duration: float,
+                    t: np.ndarray, *, phase: float = 0.0,
+                    vibrato: bool = True) -> tuple[np.ndarray, float]:
+    """Play a left-hand description back over a target note.
+
+    Parameters
+    ----------
+    description : np.ndarray [shape=(LEFT_HAND_DIM,)]
+        From :func:`describe_left_hand`, of a sample note of ``sample_duration`` s.
+    sample_duration, target_duration : float, s
+        Durations of the sample and of the target note (> 0).
+    t : np.ndarray [shape=(m,)], s
+        Times from the target's onset (increasing).
+    phase : float, rad
+        Vibrato phase at the target's onset (the previous note's end phase: continuous).
+    vibrato : bool
+        False plays the intonation only (a trilled note, say).
+
+    Returns
+    -------
+    cents : np.ndarray [shape=(m,)], cents
+        Pitch deviation from the target's nominal pitch.
+    end_phase : float, rad
+        The phase at ``target_duration`` (for the next note).
+
+    Examples
+    --------
+    >>> d = np.r_[4.0, 0.0, 0.0, [0.5, 0.5, 10, 10, 10, 1/3, 2/3, 1/3, 2/3],
+    ...           [1.0, 5.0, 5.0, 1/3, 2/3]]
+    >>> c, end = left_hand_cents(d, 1.0, 2.0, np.array([0.0, 0.05]), phase=np.pi / 2)
+    >>> c.round(3).tolist(), round(end % (2 * np.pi), 3)
+    ([14.0, 4.0], 1.571)
+    """
+    d = np.asarray(description, np.float64)
+    ds, dt = float(sample_duration), float(target_duration)
+    if d.shape != (LEFT_HAND_DIM,) or not (ds > 0 and dt > 0):
+        raise ParameterError(f"a left-hand description has {LEFT_HAND_DIM} numbers and "
+                             f"positive durations (got {d.shape}, {ds}, {dt})")
+    t = np.asarray(t, np.float64)
+    intonation = float(d[PARTS["intonation"]][0])
+    delay_s = float(np.clip(d[PARTS["onset_delay"]][0], 0.0, ds))
+    delay_t = delay_s * min(1.0, dt / ds)
+    # target time -> sample time: the delay kept, the rest stretched
+    tt = np.clip(t, 0.0, dt)
+    u = np.where(tt < delay_t, tt * (delay_s / delay_t if delay_t > 0 else 1.0),
+                 delay_s + (tt - delay_t) * (ds - delay_s) / max(dt - delay_t, 1e-9))
+    x = (u - delay_s) / max(ds - delay_s, 1e-9)
+    rate = _envelope(d[PARTS["rate"]], RATE_SEGMENTS, x)
+    extent = np.where(tt >= delay_t, np.maximum(_envelope(d[PARTS["extent"]],
+                                                          EXTENT_SEGMENTS, x), 0.0), 0.0)
+    rate = np.clip(rate, *RATE_RANGE)
+    steps = np.diff(t, prepend=t[0] if t.size else 0.0)
+    ph = phase + 2.0 * np.pi * np.cumsum(rate * steps)
+    cents = intonation + (extent * np.sin(ph) if vibrato else 0.0)
+    last = float(ph[-1]) if t.size else phase
+    if t.size:
+        tail = max(dt - float(t[-1]), 0.0)
+        last += 2.0 * np.pi * float(rate[-1]) * tail
+    return np.asarray(cents, np.float64), last
+
+
+class LeftHandSource:
+    """The left-hand descriptions of database notes (read on first use).
+
+    Parameters
+    ----------
+    db : gesture_db.store.GestureDB
+        The database; a note without a description (or a database of schema 1.0 / 1.1)
+        gives None.
+    """
+
+    def __init__(self, db) -> None:
+        self.db = db
+        self._by_id: dict[str, np.ndarray] | None = None
+
+    def _load(self) -> dict[str, np.ndarray]:
+        notes = self.db.notes()
+        out: dict[str, np.ndarray] = {}
+        if "left_hand" in notes:
+            for nid, vec in zip(notes["note_id"], notes["left_hand"], strict=True):
+                if vec is not None and not (isinstance(vec, float) and np.isnan(vec)):
+                    out[str(nid)] = np.asarray(vec, np.float64)
+        return out
+
+    def get(self, note_id: str) -> np.ndarray | None:
+        """The description of ``note_id`` (shape ``(LEFT_HAND_DIM,)``), None without one."""
+        if self._by_id is None:
+            self._by_id = self._load()
+        return self._by_id.get(str(note_id))
+
+    @property
+    def n_described(self) -> int:
+        """Notes with a left-hand description."""
+        if self._by_id is None:
+            self._by_id = self._load()
+        return len(self._by_id)
+
+
+def describe_notes(cents: np.ndarray, bounds: pd.DataFrame | np.ndarray,
+                   frame_rate: float) -> list[list[float] | None]:
+    """Descriptions of several notes of one take (None where its contour has nulls).
+
+    Parameters
+    ----------
+    cents : np.ndarray [shape=(n,)], cents
+        The take's ``pitch_deviation_cents`` (NaN where null).
+    bounds : np.ndarray [shape=(k, 2)], int
+        First and last frame of each note.
+    frame_rate : float, Hz
+    """
+    out: list[list[float] | None] = []
+    for a, b in np.asarray(bounds, np.int64):
+        seg = cents[int(a):int(b) + 1]
+        out.append(None if seg.size == 0 or not np.isfinite(seg).all()
+                   else describe_left_hand(seg, frame_rate).tolist())
+    return out
+
+
+__all__ = ["DEFAULT_RATE", "LEFT_HAND_DIM", "LEFT_HAND_LAYOUT", "LeftHandSource", "PARTS",
+           "describe_left_hand", "describe_notes", "left_hand_cents", "mean_extent",
+           "mean_rate", "moving_average"]
