@@ -207,5 +207,6 @@ def frame_rate(recording: pd.DataFrame) -> float:
 
 
 __all__ = ["DEFAULT_INSTRUMENT", "FRAME_RATE_RANGE", "PITCH_DEVIATION_LIMIT", "RECORDING",
-           "RECORDING_FRAME_RATE", "RECORDING_VERSION", "check_instrument", "frame_rate", "read_recording",
+           "RECORDING_FRAME_RATE", "RECORDING_VERSION", "check_instrument", "frame_rate",
+           "read_recording",
            "recording_instrument", "validate_recording", "write_recording"]

@@ -19,17 +19,17 @@ into a slowly varying *description* that they can (:func:`describe_left_hand`), 
 The extraction method: (1) the glide is the trailing run of frames more than
 :data:`GLIDE_CENTS` from the median of the note's first 80 %; the rest is the body; (2) the
 body is smoothed by a 25 ms moving average (sensor noise; the peaks are divided by its gain
-at the note's rate); (3) a first centre line is its
-moving average over one period of a :data:`DEFAULT_RATE` vibrato, whose zero crossings give
-a first rate; the centre line is then the moving average over one period of that rate
-(which cancels a sine of that rate); (4) the oscillation (body minus centre) is cut at its
-zero crossings into half-cycles; those whose peak reaches :data:`MIN_EXTENT` cents and
-:data:`RELATIVE_EXTENT` of the median such peak are the vibrato (the longest stretch of
-consecutive ones): their peaks, at their middles, give the extent envelope (held before the first and
-after the last), and each pair of half-cycles (one cycle) gives a rate at its middle (the first and last
-cycles left out when there are four or more); the
-envelopes are sampled on the frames from the onset to the end and fitted with Bezier segments. A note with
-fewer than :data:`MIN_HALF_CYCLES` kept half-cycles has no vibrato (extent 0, rate
+at the note's rate); (3) a first centre line is its moving average over one period of a
+:data:`DEFAULT_RATE` vibrato, whose zero crossings give a first rate; the centre line is
+then the moving average over one period of that rate (which cancels a sine of that rate);
+(4) the oscillation (body minus centre) is cut at its zero crossings into half-cycles;
+those whose peak reaches :data:`MIN_EXTENT` cents and :data:`RELATIVE_EXTENT` of the
+median such peak are the vibrato (the longest stretch of consecutive ones): their peaks, at
+their middles, give the extent envelope (held before the first and after the last), and
+each pair of half-cycles (one cycle) gives a rate at its middle (the first and last cycles
+left out when there are four or more); the envelopes are sampled on the frames from the
+onset to the end and fitted with Bezier segments. A note with fewer than
+:data:`MIN_HALF_CYCLES` kept half-cycles has no vibrato (extent 0, rate
 :data:`DEFAULT_RATE`, onset delay = its duration).
 
 :func:`left_hand_cents` plays a description back over a target note of another duration:
@@ -80,6 +80,21 @@ def _slices() -> dict[str, slice]:
 
 #: Where each part of :data:`LEFT_HAND_LAYOUT` sits in a description.
 PARTS = _slices()
+
+
+def left_hand_value_mask() -> np.ndarray:
+    """Which entries of a description are values (not Bezier shares or handle ratios).
+
+    Examples
+    --------
+    >>> left_hand_value_mask().astype(int).tolist()
+    [1, 1, 1, 0, 0, 1, 1, 1, 0, 0, 0, 0, 0, 1, 1, 0, 0]
+    """
+    def bezier(n: int) -> list[bool]:
+        return [False] * n + [True] * (n + 1) + [False] * (2 * n)
+
+    return np.array([True, True, True] + bezier(EXTENT_SEGMENTS) + bezier(RATE_SEGMENTS),
+                    bool)
 
 
 def moving_average(x: np.ndarray, width: int) -> np.ndarray:
@@ -353,5 +368,6 @@ def describe_notes(cents: np.ndarray, bounds: pd.DataFrame | np.ndarray,
 
 
 __all__ = ["DEFAULT_RATE", "LEFT_HAND_DIM", "LEFT_HAND_LAYOUT", "LeftHandSource", "PARTS",
-           "describe_left_hand", "describe_notes", "left_hand_cents", "mean_extent",
+           "describe_left_hand", "describe_notes", "left_hand_cents", "left_hand_value_mask",
+           "mean_extent",
            "mean_rate", "moving_average"]
