@@ -22,15 +22,17 @@ body is smoothed by a 25 ms moving average (sensor noise; the peaks are divided 
 at the note's rate); (3) a first centre line is its moving average over one period of a
 :data:`DEFAULT_RATE` vibrato, whose zero crossings give a first rate; the centre line is
 then the moving average over one period of that rate (which cancels a sine of that rate);
-(4) the oscillation (body minus centre) is cut at its zero crossings into half-cycles;
-those whose peak reaches :data:`MIN_EXTENT` cents and :data:`RELATIVE_EXTENT` of the
-median such peak are the vibrato (the longest stretch of consecutive ones): their peaks, at
-their middles, give the extent envelope (held before the first and after the last), and
-each pair of half-cycles (one cycle) gives a rate at its middle (the first and last cycles
-left out when there are four or more); the envelopes are sampled on the frames from the
-onset to the end and fitted with Bezier segments. A note with fewer than
-:data:`MIN_HALF_CYCLES` kept half-cycles has no vibrato (extent 0, rate
-:data:`DEFAULT_RATE`, onset delay = its duration).
+(4) the oscillation (body minus centre) is cut at its zero crossings into half-cycles; those
+whose peak reaches :data:`MIN_EXTENT` cents are the vibrato (the longest stretch of
+consecutive ones, less a first or last one under :data:`RELATIVE_EXTENT` of its neighbour's
+peak, where the centre line bends): their peaks, at their middles, give the extent envelope
+(held before the first and after the last), and each pair of half-cycles (one cycle) gives a
+rate at its middle (the first and last cycles left out); a short vibrato (fewer than
+:data:`SHORT_CROSSINGS` zero crossings) is instead one sine with a linear extent fitted by
+least squares (:func:`sine_fit`); the envelopes are sampled on the frames from the onset to
+the end and fitted with Bezier segments. A note with fewer than :data:`MIN_HALF_CYCLES` kept
+half-cycles has no vibrato (extent 0, rate :data:`DEFAULT_RATE`, onset delay = its
+duration).
 
 :func:`left_hand_cents` plays a description back over a target note of another duration:
 the onset delay is kept in seconds (scaled down on a shorter note), the envelopes are
@@ -58,10 +60,12 @@ RATE_SEGMENTS = 1
 DEFAULT_RATE = 5.5
 #: A half-cycle whose peak (cents) reaches this is vibrato.
 MIN_EXTENT = 2.0
-#: ... and this share of the median peak of the note's vibrato half-cycles.
-RELATIVE_EXTENT = 0.4
+#: ... and, first or last, this share of the peak of the half-cycle beside it.
+RELATIVE_EXTENT = 0.5
 #: A note needs this many vibrato half-cycles to have a vibrato.
-MIN_HALF_CYCLES = 3
+MIN_HALF_CYCLES = 2
+#: A vibrato with fewer zero crossings than this is short: one sine is fitted to it.
+SHORT_CROSSINGS = 7
 #: Frames this far (cents) from the note's median at its end are a glide to the next note.
 GLIDE_CENTS = 45.0
 #: Rates (Hz) a vibrato may have.
@@ -129,8 +133,9 @@ def _half_cycles(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if z.size < 2:
         return np.zeros(0), np.zeros(0), np.zeros(0)
     a, b = z[:-1], z[1:]
-    peaks = np.array([np.max(np.abs(y[int(np.ceil(p)):int(np.floor(q)) + 1]), initial=0.0)
-                      for p, q in zip(a, b, strict=True)])
+    # the frames strictly between two crossings; each half-cycle holds at least one
+    cuts = np.floor(z).astype(np.int64) + 1  # first frame after each crossing (< y.size)
+    peaks = np.maximum.reduceat(np.abs(y), cuts)[: a.size]
     return a, b, peaks
 
 
@@ -146,12 +151,17 @@ def _vibrato_cycles(body: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray
         centre = moving_average(xs, round(fs / rate0))
         a, b, peak = _half_cycles(xs - centre)
         keep = peak >= MIN_EXTENT
-        if keep.any():  # the centre line bends where a vibrato starts: not a half-cycle
-            keep &= peak >= RELATIVE_EXTENT * np.median(peak[keep])
     # keep the longest stretch of consecutive kept half-cycles
     runs = np.split(np.flatnonzero(keep), np.flatnonzero(np.diff(np.flatnonzero(keep)) > 1)
                     + 1) if keep.any() else []
-    best = max(runs, key=len) if runs else np.zeros(0, int)
+    best = list(max(runs, key=len)) if runs else []
+    # the centre line bends where a vibrato starts or stops: a bump much smaller than the
+    # half-cycle beside it is not one
+    while len(best) > 1 and peak[best[0]] < RELATIVE_EXTENT * peak[best[1]]:
+        best.pop(0)
+    while len(best) > 1 and peak[best[-1]] < RELATIVE_EXTENT * peak[best[-2]]:
+        best.pop()
+    best = np.asarray(best, np.int64)
     return centre, a[best], b[best], peak[best]
 
 
@@ -207,17 +217,57 @@ def describe_left_hand(cents: np.ndarray, frame_rate: float) -> np.ndarray:
     mid = 0.5 * (a + b)
     extent = np.interp(grid, mid, peak)
     z = np.r_[a, b[-1]]
-    if z.size >= 6:  # the first and last cycles lean on the bent ends of the centre line
-        z = z[1:-1]
-    if z.size >= 3:
-        rates = fs / (z[2:] - z[:-2])
-        rate = np.interp(grid, 0.5 * (z[2:] + z[:-2]), np.clip(rates, *RATE_RANGE))
-    else:
-        rate = np.full(grid.size, float(np.clip(0.5 * fs / np.median(b - a), *RATE_RANGE)))
+    if z.size < SHORT_CROSSINGS:  # a short vibrato: one sine fitted to it
+        rate_hz, extent = sine_fit(body[int(np.ceil(a[0])):], fs)
+        extent = np.interp(grid - grid[0], np.arange(extent.size), extent)
+        return _description(intonation, a[0] / fs, glide, extent,
+                            np.full(grid.size, rate_hz))
+    z = z[1:-1]  # the first and last cycles lean on the bent ends of the centre line
+    rates = fs / (z[2:] - z[:-2])
+    rate = np.interp(grid, 0.5 * (z[2:] + z[:-2]), np.clip(rates, *RATE_RANGE))
     # undo the smoothing's attenuation of a sine at the note's rate
     arg = np.pi * float(np.median(rate)) * max(round(_SMOOTH * fs), 1) / fs
     extent = extent * (arg / np.sin(arg))
     return _description(intonation, a[0] / fs, glide, extent, rate)
+
+
+def sine_fit(x: np.ndarray, fs: float) -> tuple[float, np.ndarray]:
+    """Rate (Hz) and extent envelope (cents, per frame) of a short vibrato by least squares.
+
+    Fits ``p0 + p1 t + (a0 + a1 t) sin(2 pi f t) + (b0 + b1 t) cos(2 pi f t)`` on a grid
+    of rates ``f`` (:data:`RATE_RANGE`, 0.1 Hz steps, then 0.01 Hz around the best).
+
+    Examples
+    --------
+    >>> t = np.arange(0, 0.3, 1 / 240)
+    >>> rate, extent = sine_fit(3 + 10 * np.sin(2 * np.pi * 5.7 * t + 1), 240.0)
+    >>> round(rate, 2), round(float(extent.mean()), 1)
+    (5.7, 10.0)
+    """
+    x = np.asarray(x, np.float64)
+    t = np.arange(x.size) / fs
+    tc = t - t.mean() if t.size else t
+
+    def fit(freqs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Residual sums of squares and coefficients per rate (normal equations, batched)."""
+        w = 2 * np.pi * freqs[:, None] * t[None, :]
+        s, c = np.sin(w), np.cos(w)
+        one = np.ones_like(s)
+        basis = np.stack([one, one * tc, s, tc * s, c, tc * c], axis=2)  # (F, n, 6)
+        gram = np.matmul(basis.transpose(0, 2, 1), basis) + 1e-9 * np.eye(6)
+        rhs = basis.transpose(0, 2, 1) @ x
+        coef = np.linalg.solve(gram, rhs[..., None])[..., 0]
+        return float(x @ x) - np.einsum("fi,fi->f", coef, rhs), coef
+
+    if x.size < 8:
+        return DEFAULT_RATE, np.zeros(max(x.size, 2))
+    coarse = np.arange(RATE_RANGE[0], RATE_RANGE[1] + 1e-9, 0.1)
+    best = coarse[int(np.argmin(fit(coarse)[0]))]
+    fine = np.arange(best - 0.1, best + 0.1 + 1e-9, 0.01)
+    sse, coefs = fit(fine)
+    k = int(np.argmin(sse))
+    rate, coef = float(fine[k]), coefs[k]
+    return rate, np.hypot(coef[2] + coef[3] * tc, coef[4] + coef[5] * tc)
 
 
 def _description(intonation: float, delay: float, glide: float, extent: np.ndarray,
@@ -369,5 +419,4 @@ def describe_notes(cents: np.ndarray, bounds: pd.DataFrame | np.ndarray,
 
 __all__ = ["DEFAULT_RATE", "LEFT_HAND_DIM", "LEFT_HAND_LAYOUT", "LeftHandSource", "PARTS",
            "describe_left_hand", "describe_notes", "left_hand_cents", "left_hand_value_mask",
-           "mean_extent",
-           "mean_rate", "moving_average"]
+           "mean_extent", "mean_rate", "moving_average", "sine_fit"]
