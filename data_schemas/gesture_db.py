@@ -137,7 +137,8 @@ DB_GROUP_MODELS = TableSpec(
         Column("rms_force", pa.float64(), "N", "Mean Bezier RMS error of force."),
         Column("rms_beta", pa.float64(), "1", "Mean Bezier RMS error of beta."),
         Column("left_hand_n_notes", pa.int32(), "1",
-               "Notes of the group with a left-hand description (0: no left-hand block).",
+               "Stopped notes of the group with a left-hand description, which the left-hand "
+               "block is fitted on (0: no block).",
                minimum=0, nullable=True, required=False),
         Column("left_hand_feature_dim", pa.int16(), "1", "Length of the left-hand features.",
                minimum=0, nullable=True, required=False),

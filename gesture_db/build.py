@@ -35,7 +35,7 @@ from gesture_db.extract import extract_take
 from gesture_db.features import GroupModel, fit_group_model
 from gesture_db.groups import grammar_for
 from gesture_db.importers import Source, load_source, resolve_sources, source_instrument
-from gesture_db.left_hand import left_hand_value_mask
+from gesture_db.left_hand import left_hand_value_mask, stopped_notes
 from gesture_db.store import model_row, read_source, remove_unlisted, write_source
 
 #: How long to wait for a dask.distributed scheduler to answer.
@@ -331,7 +331,7 @@ def _commit_models(db: Path, sources: dict[str, dict], generation: int, params: 
                "bow_force": float(g["fit_rms_force"].mean()),
                "beta": float(g["fit_rms_beta"].mean())}
         rows.append(model_row(group, len(g), grammar_for(group), model, rms, hand,
-                              int(g["left_hand"].notna().sum())))
+                              int(g["left_hand_features"].notna().sum())))
     models_rel = Path("models") / f"{gen}.parquet"
     models = pd.DataFrame(rows) if rows else DB_GROUP_MODELS.schema.empty_table().to_pandas()
     write_table(models, db / models_rel, DB_GROUP_MODELS)
@@ -348,8 +348,11 @@ def _left_hand_block(g: pd.DataFrame, params: BuildParams) -> GroupModel | None:
     disturb; the left hand varies with other context (note length, phrase position) than
     the bow; and notes of a recording without a left-hand contour keep their bow features.
     Shares and handle ratios of the envelopes weigh ``params.shape_weight`` like the bow's.
+    Only stopped notes count: on an open string the left hand does nothing, for want of a
+    finger, not by choice (those notes keep their description, without features).
     """
-    has = g["left_hand"].notna().to_numpy() if "left_hand" in g else np.zeros(len(g), bool)
+    has = (g["left_hand"].notna().to_numpy() & stopped_notes(g) if "left_hand" in g
+           else np.zeros(len(g), bool))
     g["left_hand_features"] = None
     if not has.any():
         return None

@@ -61,17 +61,18 @@ def summarize(db: GestureDB) -> dict:
 def left_hand_summary(notes: pd.DataFrame) -> dict | None:
     """The notes' left-hand descriptions in figures (None when no note has one).
 
-    ``n_notes`` described; over the described notes of at least 0.31 s
-    (the long notes of ``pipelines.reports.vibrato``): ``vibrato_share`` (mean extent >= 3
-    cents), ``vibrato_extent_cents`` and ``vibrato_rate_hz`` (means over those with
-    vibrato), and ``intonation_spread_cents`` (standard deviation of the intonation).
+    ``n_notes`` described; over the described stopped notes of at least 0.31 s
+    (``long_notes``, the long notes of ``pipelines.reports.vibrato``): ``vibrato_share``
+    (mean extent >= 3 cents), ``vibrato_extent_cents`` and ``vibrato_rate_hz`` (means over
+    those with vibrato), and ``intonation_spread_cents`` (standard deviation of the
+    intonation).
     """
-    from gesture_db.left_hand import mean_extent, mean_rate
+    from gesture_db.left_hand import mean_extent, mean_rate, stopped_notes
 
     if "left_hand" not in notes or not notes["left_hand"].notna().any():
         return None
     has = notes[notes["left_hand"].notna()]
-    long = has[has["duration"] >= 0.31]
+    long = has[(has["duration"] >= 0.31).to_numpy() & stopped_notes(has)]
     d = [np.asarray(v, float) for v in long["left_hand"]]
     extent = np.array([mean_extent(v) for v in d])
     rate = np.array([mean_rate(v) for v in d])
@@ -155,7 +156,7 @@ def format_summary(summary: dict) -> str:
     hand = summary.get("left_hand")
     if hand and hand["long_notes"]:
         lines.append(f"left hand: {hand['n_notes']} notes described; of the "
-                     f"{hand['long_notes']} of 0.31 s or more, "
+                     f"{hand['long_notes']} stopped of 0.31 s or more, "
                      f"{100 * hand['vibrato_share']:.0f} % with vibrato"
                      + (f" ({hand['vibrato_extent_cents']:.1f} cents peak at "
                         f"{hand['vibrato_rate_hz']:.2f} Hz)" if hand["vibrato_extent_cents"]

@@ -360,14 +360,35 @@ def left_hand_cents(description: np.ndarray, sample_duration: float, target_dura
     return np.asarray(cents, np.float64), last
 
 
+def stopped_notes(notes: pd.DataFrame) -> np.ndarray:
+    """Which database notes were stopped by a finger (not played on an open string)."""
+    from data_schemas.instruments import instrument_facts
+
+    out = np.zeros(len(notes), bool)
+    inst = (notes["instrument"].fillna("violin").astype(str).to_numpy() if "instrument" in notes
+            else np.full(len(notes), "violin"))
+    for name in np.unique(inst):
+        rows = inst == name
+        opens = instrument_facts(str(name)).open_pitch(notes["string"].to_numpy(int)[rows])
+        out[rows] = notes["midi_pitch"].to_numpy(int)[rows] != opens
+    return out
+
+
+def _present(vec) -> bool:
+    return vec is not None and not (isinstance(vec, float) and np.isnan(vec))
+
+
 class LeftHandSource:
-    """The left-hand descriptions of database notes (read on first use).
+    """The left hands of database notes, to be played on stopped target notes.
+
+    A stopped sample gives its own description; a sample played on an open string (whose
+    left hand did nothing, for want of a finger) gives the mean description of its group's
+    stopped notes (the group's left-hand Gaussian); a note without a description, or a
+    database of schema 1.0 / 1.1, gives None.
 
     Parameters
     ----------
     db : gesture_db.store.GestureDB
-        The database; a note without a description (or a database of schema 1.0 / 1.1)
-        gives None.
     """
 
     def __init__(self, db) -> None:
@@ -377,14 +398,27 @@ class LeftHandSource:
     def _load(self) -> dict[str, np.ndarray]:
         notes = self.db.notes()
         out: dict[str, np.ndarray] = {}
-        if "left_hand" in notes:
-            for nid, vec in zip(notes["note_id"], notes["left_hand"], strict=True):
-                if vec is not None and not (isinstance(vec, float) and np.isnan(vec)):
-                    out[str(nid)] = np.asarray(vec, np.float64)
+        if "left_hand" not in notes:
+            return out
+        from gesture_db.store import left_hand_model_from_row
+
+        means = {}
+        for _, row in self.db.models().iterrows():
+            model = left_hand_model_from_row(row)
+            if model is not None:
+                means[row["group"]] = model.param_mean
+        stopped = stopped_notes(notes)
+        for nid, group, vec, own in zip(notes["note_id"], notes["group"], notes["left_hand"],
+                                        stopped, strict=True):
+            if not _present(vec):
+                continue
+            hand = np.asarray(vec, np.float64) if own else means.get(group)
+            if hand is not None:
+                out[str(nid)] = hand
         return out
 
     def get(self, note_id: str) -> np.ndarray | None:
-        """The description of ``note_id`` (shape ``(LEFT_HAND_DIM,)``), None without one."""
+        """The left hand of ``note_id`` (shape ``(LEFT_HAND_DIM,)``), None without one."""
         if self._by_id is None:
             self._by_id = self._load()
         return self._by_id.get(str(note_id))
@@ -418,5 +452,6 @@ def describe_notes(cents: np.ndarray, bounds: pd.DataFrame | np.ndarray,
 
 
 __all__ = ["DEFAULT_RATE", "LEFT_HAND_DIM", "LEFT_HAND_LAYOUT", "LeftHandSource", "PARTS",
+           "stopped_notes",
            "describe_left_hand", "describe_notes", "left_hand_cents", "left_hand_value_mask",
            "mean_extent", "mean_rate", "moving_average", "sine_fit"]

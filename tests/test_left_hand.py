@@ -264,18 +264,26 @@ def test_database_round_trip_of_the_left_hand(tiny_db):
     for want, got in zip(direct["left_hand"], stored["left_hand"], strict=True):
         np.testing.assert_allclose(np.asarray(got), want, rtol=0, atol=1e-12)
     assert contours["pitch_deviation_cents"].notna().all()
+    from gesture_db.left_hand import LeftHandSource, stopped_notes
+
+    stopped = stopped_notes(notes)
+    assert stopped.mean() > 0.5 and (notes["left_hand_features"].notna() == stopped).all()
     described = 0
+    source = LeftHandSource(db)
     for group in db.groups:
         model = db.left_hand_model(group)
-        g = notes[notes["group"] == group]
+        g = notes[(notes["group"] == group) & stopped]
         if model is None:
+            assert g.empty
             continue
         described += len(g)
         feats = model.transform(np.vstack(g["left_hand"].to_numpy()))
         np.testing.assert_allclose(np.vstack(g["left_hand_features"].to_numpy()), feats,
                                    atol=1e-9)
         assert np.all(np.linalg.eigvalsh(model.feature_cov) > 0)
-    assert described == len(notes)
+        for nid in notes.loc[(notes["group"] == group) & ~stopped, "note_id"]:
+            np.testing.assert_allclose(source.get(nid), model.param_mean)  # open: the mean
+    assert described == stopped.sum()
     # vibrato is found where the simulator played it
     vib = ann["true_vibrato_extent_cents"].to_numpy() > 0
     ext = np.array([mean_extent(np.asarray(v)) for v in direct["left_hand"]])
