@@ -235,7 +235,10 @@ def sine_fit(x: np.ndarray, fs: float) -> tuple[float, np.ndarray]:
     """Rate (Hz) and extent envelope (cents, per frame) of a short vibrato by least squares.
 
     Fits ``p0 + p1 t + (a0 + a1 t) sin(2 pi f t) + (b0 + b1 t) cos(2 pi f t)`` on a grid
-    of rates ``f`` (:data:`RATE_RANGE`, 0.1 Hz steps, then 0.01 Hz around the best).
+    of rates ``f`` (:data:`RATE_RANGE`, 0.1 Hz steps, then 0.01 Hz around the best); a span
+    shorter than two cycles of :data:`DEFAULT_RATE` fits ``p0 + a0 sin + b0 cos`` only
+    (the slopes would trade off against a slow sine). The extent never exceeds 1.25 times
+    the span's largest deviation from its median.
 
     Examples
     --------
@@ -253,21 +256,27 @@ def sine_fit(x: np.ndarray, fs: float) -> tuple[float, np.ndarray]:
         w = 2 * np.pi * freqs[:, None] * t[None, :]
         s, c = np.sin(w), np.cos(w)
         one = np.ones_like(s)
-        basis = np.stack([one, one * tc, s, tc * s, c, tc * c], axis=2)  # (F, n, 6)
-        gram = np.matmul(basis.transpose(0, 2, 1), basis) + 1e-9 * np.eye(6)
+        parts = [one, one * tc, s, tc * s, c, tc * c] if linear else [one, s, c]
+        basis = np.stack(parts, axis=2)  # (F, n, 6 or 3)
+        gram = np.matmul(basis.transpose(0, 2, 1), basis) + 1e-9 * np.eye(len(parts))
         rhs = basis.transpose(0, 2, 1) @ x
         coef = np.linalg.solve(gram, rhs[..., None])[..., 0]
         return float(x @ x) - np.einsum("fi,fi->f", coef, rhs), coef
 
     if x.size < 8:
         return DEFAULT_RATE, np.zeros(max(x.size, 2))
+    linear = x.size / fs >= 2.0 / DEFAULT_RATE
     coarse = np.arange(RATE_RANGE[0], RATE_RANGE[1] + 1e-9, 0.1)
     best = coarse[int(np.argmin(fit(coarse)[0]))]
-    fine = np.arange(best - 0.1, best + 0.1 + 1e-9, 0.01)
+    fine = np.clip(np.arange(best - 0.1, best + 0.1 + 1e-9, 0.01), *RATE_RANGE)
     sse, coefs = fit(fine)
     k = int(np.argmin(sse))
     rate, coef = float(fine[k]), coefs[k]
-    return rate, np.hypot(coef[2] + coef[3] * tc, coef[4] + coef[5] * tc)
+    if linear:
+        extent = np.hypot(coef[2] + coef[3] * tc, coef[4] + coef[5] * tc)
+    else:
+        extent = np.full(x.size, float(np.hypot(coef[1], coef[2])))
+    return rate, np.minimum(extent, 1.25 * float(np.max(np.abs(x - np.median(x)))))
 
 
 def _description(intonation: float, delay: float, glide: float, extent: np.ndarray,
