@@ -383,6 +383,23 @@ def stopped_notes(notes: pd.DataFrame) -> np.ndarray:
     return out
 
 
+def draw_left_hand(model, key: str) -> np.ndarray:
+    """A left-hand description drawn from a group's Gaussian, seeded by ``key`` (CRC-32).
+
+    Parameters
+    ----------
+    model : gesture_db.features.GroupModel
+        A group's left-hand block.
+    key : str
+        Seed text (a note id): the same key gives the same draw.
+    """
+    import zlib
+
+    rng = np.random.default_rng(zlib.crc32(key.encode()))
+    f = rng.multivariate_normal(model.feature_mean, model.feature_cov)
+    return model.inverse_transform(f)[0]
+
+
 def _present(vec) -> bool:
     return vec is not None and not (isinstance(vec, float) and np.isnan(vec))
 
@@ -391,8 +408,9 @@ class LeftHandSource:
     """The left hands of database notes, to be played on stopped target notes.
 
     A stopped sample gives its own description; a sample played on an open string (whose
-    left hand did nothing, for want of a finger) gives the mean description of its group's
-    stopped notes (the group's left-hand Gaussian); a note without a description, or a
+    left hand did nothing, for want of a finger) gives a draw from its group's left-hand
+    Gaussian (fitted on the group's stopped notes), seeded by the note's id (CRC-32), so
+    the same note always lends the same left hand; a note without a description, or a
     database of schema 1.0 / 1.1, gives None.
 
     Parameters
@@ -411,19 +429,20 @@ class LeftHandSource:
             return out
         from gesture_db.store import left_hand_model_from_row
 
-        means = {}
+        models = {}
         for _, row in self.db.models().iterrows():
             model = left_hand_model_from_row(row)
             if model is not None:
-                means[row["group"]] = model.param_mean
+                models[row["group"]] = model
         stopped = stopped_notes(notes)
         for nid, group, vec, own in zip(notes["note_id"], notes["group"], notes["left_hand"],
                                         stopped, strict=True):
             if not _present(vec):
                 continue
-            hand = np.asarray(vec, np.float64) if own else means.get(group)
-            if hand is not None:
-                out[str(nid)] = hand
+            if own:
+                out[str(nid)] = np.asarray(vec, np.float64)
+            elif group in models:
+                out[str(nid)] = draw_left_hand(models[group], str(nid))
         return out
 
     def get(self, note_id: str) -> np.ndarray | None:
@@ -461,6 +480,6 @@ def describe_notes(cents: np.ndarray, bounds: pd.DataFrame | np.ndarray,
 
 
 __all__ = ["DEFAULT_RATE", "LEFT_HAND_DIM", "LEFT_HAND_LAYOUT", "LeftHandSource", "PARTS",
-           "stopped_notes",
+           "draw_left_hand", "stopped_notes",
            "describe_left_hand", "describe_notes", "left_hand_cents", "left_hand_value_mask",
            "mean_extent", "mean_rate", "moving_average", "sine_fit"]
