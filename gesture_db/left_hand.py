@@ -384,20 +384,27 @@ def stopped_notes(notes: pd.DataFrame) -> np.ndarray:
 
 
 def draw_left_hand(model, key: str) -> np.ndarray:
-    """A left-hand description drawn from a group's Gaussian, seeded by ``key`` (CRC-32).
+    """A group's mean left hand with an intonation drawn from its spread (seed: ``key``).
+
+    The mean keeps the group's vibrato whole (a draw of the few PCA features would blur
+    its envelopes); the intonation is drawn from N(mean, standard deviation) of the group,
+    seeded by the CRC-32 of ``key``.
 
     Parameters
     ----------
     model : gesture_db.features.GroupModel
-        A group's left-hand block.
+        A group's left-hand block (``param_scale`` of the intonation is its standard
+        deviation: values weigh 1).
     key : str
         Seed text (a note id): the same key gives the same draw.
     """
     import zlib
 
     rng = np.random.default_rng(zlib.crc32(key.encode()))
-    f = rng.multivariate_normal(model.feature_mean, model.feature_cov)
-    return model.inverse_transform(f)[0]
+    out = np.array(model.param_mean, np.float64)
+    k = PARTS["intonation"].start
+    out[k] = rng.normal(out[k], model.param_scale[k])
+    return out
 
 
 def _present(vec) -> bool:
@@ -408,10 +415,11 @@ class LeftHandSource:
     """The left hands of database notes, to be played on stopped target notes.
 
     A stopped sample gives its own description; a sample played on an open string (whose
-    left hand did nothing, for want of a finger) gives a draw from its group's left-hand
-    Gaussian (fitted on the group's stopped notes), seeded by the note's id (CRC-32), so
-    the same note always lends the same left hand; a note without a description, or a
-    database of schema 1.0 / 1.1, gives None.
+    left hand did nothing, for want of a finger) gives its group's mean left hand (the
+    centre of the group's left-hand Gaussian, fitted on its stopped notes) with an
+    intonation drawn from the group's spread, seeded by the note's id (CRC-32), so the same
+    note always lends the same left hand; a note without a description, or a database of
+    schema 1.0 / 1.1, gives None.
 
     Parameters
     ----------
