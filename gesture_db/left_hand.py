@@ -383,30 +383,6 @@ def stopped_notes(notes: pd.DataFrame) -> np.ndarray:
     return out
 
 
-def draw_left_hand(model, key: str) -> np.ndarray:
-    """A group's mean left hand with an intonation drawn from its spread (seed: ``key``).
-
-    The mean keeps the group's vibrato whole (a draw of the few PCA features would blur
-    its envelopes); the intonation is drawn from N(mean, standard deviation) of the group,
-    seeded by the CRC-32 of ``key``.
-
-    Parameters
-    ----------
-    model : gesture_db.features.GroupModel
-        A group's left-hand block (``param_scale`` of the intonation is its standard
-        deviation: values weigh 1).
-    key : str
-        Seed text (a note id): the same key gives the same draw.
-    """
-    import zlib
-
-    rng = np.random.default_rng(zlib.crc32(key.encode()))
-    out = np.array(model.param_mean, np.float64)
-    k = PARTS["intonation"].start
-    out[k] = rng.normal(out[k], model.param_scale[k])
-    return out
-
-
 def _present(vec) -> bool:
     return vec is not None and not (isinstance(vec, float) and np.isnan(vec))
 
@@ -416,10 +392,8 @@ class LeftHandSource:
 
     A stopped sample gives its own description; a sample played on an open string (whose
     left hand did nothing, for want of a finger) gives its group's mean left hand (the
-    centre of the group's left-hand Gaussian, fitted on its stopped notes) with an
-    intonation drawn from the group's spread, seeded by the note's id (CRC-32), so the same
-    note always lends the same left hand; a note without a description, or a database of
-    schema 1.0 / 1.1, gives None.
+    centre of the group's left-hand Gaussian, fitted on its stopped notes); a note without
+    a description, or a database of schema 1.0 / 1.1, gives None.
 
     Parameters
     ----------
@@ -450,7 +424,7 @@ class LeftHandSource:
             if own:
                 out[str(nid)] = np.asarray(vec, np.float64)
             elif group in models:
-                out[str(nid)] = draw_left_hand(models[group], str(nid))
+                out[str(nid)] = models[group].param_mean
         return out
 
     def get(self, note_id: str) -> np.ndarray | None:
@@ -488,6 +462,6 @@ def describe_notes(cents: np.ndarray, bounds: pd.DataFrame | np.ndarray,
 
 
 __all__ = ["DEFAULT_RATE", "LEFT_HAND_DIM", "LEFT_HAND_LAYOUT", "LeftHandSource", "PARTS",
-           "draw_left_hand", "stopped_notes",
+           "stopped_notes",
            "describe_left_hand", "describe_notes", "left_hand_cents", "left_hand_value_mask",
            "mean_extent", "mean_rate", "moving_average", "sine_fit"]

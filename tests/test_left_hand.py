@@ -269,7 +269,7 @@ def test_database_round_trip_of_the_left_hand(tiny_db):
     stopped = stopped_notes(notes)
     assert stopped.mean() > 0.5 and (notes["left_hand_features"].notna() == stopped).all()
     described = 0
-    source, again = LeftHandSource(db), LeftHandSource(db)
+    source = LeftHandSource(db)
     for group in db.groups:
         model = db.left_hand_model(group)
         g = notes[(notes["group"] == group) & stopped]
@@ -281,11 +281,9 @@ def test_database_round_trip_of_the_left_hand(tiny_db):
         np.testing.assert_allclose(np.vstack(g["left_hand_features"].to_numpy()), feats,
                                    atol=1e-9)
         assert np.all(np.linalg.eigvalsh(model.feature_cov) > 0)
-        spread = np.vstack(g["left_hand"].to_numpy()).std(axis=0)
+        mean = np.vstack(g["left_hand"].to_numpy()).mean(axis=0)
         for nid in notes.loc[(notes["group"] == group) & ~stopped, "note_id"]:
-            drawn = source.get(nid)  # open: a draw from the group's Gaussian, seeded
-            np.testing.assert_array_equal(drawn, again.get(nid))
-            assert np.all(np.abs(drawn - model.param_mean) <= 6 * spread + 1e-6)
+            np.testing.assert_allclose(source.get(nid), mean)  # open: the stopped notes' mean
     assert described == stopped.sum()
     # vibrato is found where the simulator played it
     vib = ann["true_vibrato_extent_cents"].to_numpy() > 0
