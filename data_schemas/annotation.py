@@ -62,6 +62,15 @@ ANNOTATION = TableSpec(
                nullable=True, required=False, minimum=0.0),
         Column("true_offset", pa.float64(), "s", "Ground-truth offset (simulated takes only).",
                nullable=True, required=False, minimum=0.0),
+        Column("true_intonation_cents", pa.float64(), "cents",
+               "Ground-truth pitch offset of the note (simulated takes only).",
+               nullable=True, required=False, minimum=-100.0, maximum=100.0),
+        Column("true_vibrato_rate_hz", pa.float64(), "Hz",
+               "Ground-truth mean vibrato rate, null without vibrato (simulated takes only).",
+               nullable=True, required=False, minimum=0.0),
+        Column("true_vibrato_extent_cents", pa.float64(), "cents",
+               "Ground-truth mean peak vibrato extent once at full depth, 0 without vibrato "
+               "(simulated takes only).", nullable=True, required=False, minimum=0.0),
     ),
     checks=(non_decreasing("onset", within="recording_id"),),
 )

@@ -29,8 +29,12 @@ from data_schemas.paths import inside
 from data_schemas.spec import Column, TableSpec
 
 #: 1.1 adds the notes' ``instrument`` (a 1.0 database reads as violin) and the
-#: ``quality`` table of class histograms from practice renders.
-GESTURE_DB_VERSION = "1.1"
+#: ``quality`` table of class histograms from practice renders. 1.2 adds the left hand: the
+#: contours' ``pitch_deviation_cents``, the notes' ``left_hand`` description and
+#: ``left_hand_features``, and the group models' ``left_hand_*`` PCA block. A 1.0 or 1.1
+#: database still reads: its notes have no left-hand description, and gesture sampling
+#: plays the rules' left hand for them (no migration needed; rebuild to get the left hand).
+GESTURE_DB_VERSION = "1.2"
 
 _LIST = pa.list_(pa.float64())
 
@@ -74,6 +78,14 @@ DB_NOTES = TableSpec(
         Column("instrument", pa.string(), "",
                "Instrument played: violin, viola or cello (absent in 1.0 databases: violin).",
                required=False),
+        Column("left_hand", _LIST, "mixed",
+               "Left-hand description (gesture_db.left_hand.LEFT_HAND_LAYOUT): intonation "
+               "(cents), vibrato onset delay (s), glide time (s), Bezier extent envelope "
+               "(cents) and Bezier rate envelope (Hz); null without a left-hand contour.",
+               nullable=True, required=False),
+        Column("left_hand_features", _LIST, "1",
+               "Left-hand PCA feature vector of the note's group (null without one).",
+               nullable=True, required=False),
         Column("true_onset", pa.float64(), "s", "Ground-truth onset when known.",
                nullable=True, required=False),
         Column("true_offset", pa.float64(), "s", "Ground-truth offset when known.",
@@ -93,6 +105,9 @@ DB_CONTOURS = TableSpec(
         Column("beta", pa.float64(), "1", "Relative bow-bridge distance."),
         Column("bow_position", pa.float64(), "1", "Contact point along the bow, 0 = frog."),
         Column("finger_ratio", pa.float32(), "1", "Finger ratio."),
+        Column("pitch_deviation_cents", pa.float64(), "cents",
+               "Left-hand contour: pitch deviation from the note's nominal pitch (null when "
+               "the recording carried none).", nullable=True, required=False),
     ),
 )
 
@@ -121,6 +136,30 @@ DB_GROUP_MODELS = TableSpec(
         Column("rms_velocity", pa.float64(), "m/s", "Mean Bezier RMS error of velocity."),
         Column("rms_force", pa.float64(), "N", "Mean Bezier RMS error of force."),
         Column("rms_beta", pa.float64(), "1", "Mean Bezier RMS error of beta."),
+        Column("left_hand_n_notes", pa.int32(), "1",
+               "Stopped notes of the group with a left-hand description, which the left-hand "
+               "block is fitted on (0: no block).",
+               minimum=0, nullable=True, required=False),
+        Column("left_hand_feature_dim", pa.int16(), "1", "Length of the left-hand features.",
+               minimum=0, nullable=True, required=False),
+        Column("left_hand_param_mean", _LIST, "mixed",
+               "Mean of the left-hand descriptions.", nullable=True, required=False),
+        Column("left_hand_param_scale", _LIST, "mixed",
+               "Floored standard deviation of the left-hand descriptions.", nullable=True,
+               required=False),
+        Column("left_hand_components", _LIST, "1",
+               "Left-hand PCA basis, shape (left_hand_feature_dim, description length), "
+               "row-major.", nullable=True, required=False),
+        Column("left_hand_explained_variance_ratio", _LIST, "1",
+               "Share of left-hand variance per component.", nullable=True, required=False),
+        Column("left_hand_feature_mean", _LIST, "1",
+               "Mean of the left-hand features.", nullable=True, required=False),
+        Column("left_hand_feature_cov", _LIST, "1",
+               "Regularised covariance of the left-hand features, row-major.", nullable=True,
+               required=False),
+        Column("left_hand_shrinkage", pa.float64(), "1",
+               "Shrinkage of the left-hand covariance.", minimum=0.0, maximum=1.0,
+               nullable=True, required=False),
     ),
 )
 

@@ -7,6 +7,12 @@ exports, or from the actions table of any render. Frames are sampled at a consta
 ``frame_rate_hz`` and the default is :data:`RECORDING_FRAME_RATE`. The instrument played is
 the file metadata ``instrument`` (:func:`recording_instrument`); a file without it holds
 violin takes (the simulated performer is a violinist).
+
+The optional ``pitch_deviation_cents`` column is the left hand's contour, in cents from the
+nominal pitch of the note being played (not a finger ratio: cents mean the same on every
+string and instrument, and a pitch tracker on the audio measures them directly). A file
+without it, or with nulls, carries no left-hand contour; the gesture database then has no
+left-hand description for its notes (:mod:`gesture_db.left_hand`).
 """
 
 from __future__ import annotations
@@ -32,6 +38,9 @@ RECORDING_FRAME_RATE = 240.0
 #: Frame rates (Hz) a recording may have, with 0.5 % slack for rounded time stamps.
 FRAME_RATE_RANGE = (200.0, 240.0)
 _RATE_SLACK = 0.005
+
+#: Largest left-hand pitch deviation (cents) a recording may carry: an octave's shift.
+PITCH_DEVIATION_LIMIT = 1200.0
 
 #: Instrument of a recording whose file names none.
 DEFAULT_INSTRUMENT = "violin"
@@ -103,6 +112,12 @@ RECORDING = TableSpec(
         Column("finger_ratio", pa.float32(), "1",
                "Fraction of the string length removed by the finger, 1 - 2**(-semitones/12).",
                minimum=0.0, maximum=0.8),
+        Column("pitch_deviation_cents", pa.float64(), "cents",
+               "Left-hand contour: deviation of the stopped pitch from the nominal (equal-"
+               "tempered) pitch of the note being played (intonation, vibrato, shifts); "
+               "optional, null where the take carries no left-hand contour.",
+               minimum=-PITCH_DEVIATION_LIMIT, maximum=PITCH_DEVIATION_LIMIT, nullable=True,
+               required=False),
     ),
     checks=(non_decreasing("time", within="recording_id"), _bounded_takes,
             _steady_frame_rate),
@@ -191,6 +206,7 @@ def frame_rate(recording: pd.DataFrame) -> float:
     return float(1.0 / pd.Series(t).diff().median())
 
 
-__all__ = ["DEFAULT_INSTRUMENT", "FRAME_RATE_RANGE", "RECORDING", "RECORDING_FRAME_RATE",
-           "RECORDING_VERSION", "check_instrument", "frame_rate", "read_recording",
+__all__ = ["DEFAULT_INSTRUMENT", "FRAME_RATE_RANGE", "PITCH_DEVIATION_LIMIT", "RECORDING",
+           "RECORDING_FRAME_RATE", "RECORDING_VERSION", "check_instrument", "frame_rate",
+           "read_recording",
            "recording_instrument", "validate_recording", "write_recording"]

@@ -32,9 +32,10 @@ from data_schemas.gesture_db import (
 from data_schemas.io import remove_stale_temps, write_table
 from data_schemas.workers import process_pool
 from gesture_db.extract import extract_take
-from gesture_db.features import fit_group_model
+from gesture_db.features import GroupModel, fit_group_model
 from gesture_db.groups import grammar_for
 from gesture_db.importers import Source, load_source, resolve_sources, source_instrument
+from gesture_db.left_hand import left_hand_value_mask, stopped_notes
 from gesture_db.store import model_row, read_source, remove_unlisted, write_source
 
 #: How long to wait for a dask.distributed scheduler to answer.
@@ -322,19 +323,47 @@ def _commit_models(db: Path, sources: dict[str, dict], generation: int, params: 
                                 variance=params.feature_variance)
         F = model.transform(P)
         g["features"] = [f.tolist() for f in F]
+        hand = _left_hand_block(g, params)
         rel = Path("notes") / gen / f"group={group}" / "part.parquet"
         write_table(g, db / rel, DB_NOTES)
         files[group] = str(rel)
         rms = {"bow_velocity": float(g["fit_rms_velocity"].mean()),
                "bow_force": float(g["fit_rms_force"].mean()),
                "beta": float(g["fit_rms_beta"].mean())}
-        rows.append(model_row(group, len(g), grammar_for(group), model, rms))
+        rows.append(model_row(group, len(g), grammar_for(group), model, rms, hand,
+                              int(g["left_hand_features"].notna().sum())))
     models_rel = Path("models") / f"{gen}.parquet"
     models = pd.DataFrame(rows) if rows else DB_GROUP_MODELS.schema.empty_table().to_pandas()
     write_table(models, db / models_rel, DB_GROUP_MODELS)
     return dict(generation=generation, sources=sources,
                 files={"notes": files, "models": str(models_rel)},
                 segmentation=_segmentation_summary(stats), n_notes=int(len(notes)))
+
+
+def _left_hand_block(g: pd.DataFrame, params: BuildParams) -> GroupModel | None:
+    """Fit the group's left-hand PCA and Gaussian; fill ``g["left_hand_features"]``.
+
+    The left hand is a block of its own, not part of the bow's contour vector: the bow's
+    features feed the gesture cost and its predictors, which a pitch contour in cents would
+    disturb; the left hand varies with other context (note length, phrase position) than
+    the bow; and notes of a recording without a left-hand contour keep their bow features.
+    Shares and handle ratios of the envelopes weigh ``params.shape_weight`` like the bow's.
+    Only stopped notes count: on an open string the left hand does nothing, for want of a
+    finger, not by choice (those notes keep their description, without features).
+    """
+    has = (g["left_hand"].notna().to_numpy() & stopped_notes(g) if "left_hand" in g
+           else np.zeros(len(g), bool))
+    g["left_hand_features"] = None
+    if not has.any():
+        return None
+    L = np.vstack(g.loc[has, "left_hand"].to_numpy())
+    weights = np.where(left_hand_value_mask(), 1.0, params.shape_weight)
+    model = fit_group_model(L, reduction=params.reduction, weights=weights,
+                            variance=params.feature_variance)
+    feats = model.transform(L)
+    g.loc[has, "left_hand_features"] = pd.Series([f.tolist() for f in feats],
+                                                 index=g.index[has])
+    return model
 
 
 def _segmentation_summary(stats: list[dict]) -> dict:

@@ -20,6 +20,7 @@ from data_schemas.instruments import (
 )
 from gesture_db.bezier import fit_note
 from gesture_db.groups import CONTOUR_PARAMS, chain_positions, grammar_for, group_names
+from gesture_db.left_hand import describe_notes
 from gesture_db.segment import detect_notes, refine_boundaries
 from gesture_db.segment_events import detect_events
 from gesture_db.segment_score import score_segmentation
@@ -51,7 +52,9 @@ def extract_take(recording: pd.DataFrame, annotation: pd.DataFrame | None, *,
     -------
     notes : pandas.DataFrame
         Rows of the database notes table (without ``features``); ``effective_string_length``
-        is the instrument's scale length times ``1 - finger_ratio`` (m).
+        is the instrument's scale length times ``1 - finger_ratio`` (m); ``left_hand`` is
+        each note's left-hand description, None when the take has no
+        ``pitch_deviation_cents``.
     contours : pandas.DataFrame
         Rows of the contours table plus a ``group`` column.
     stats : dict
@@ -74,7 +77,7 @@ def extract_take(recording: pd.DataFrame, annotation: pd.DataFrame | None, *,
     notes["group"] = group_names(notes).to_numpy()
     note_ids = np.array([f"{source_hash}:{rid}:{int(k)}" for k in notes["note_index"]],
                         dtype=object)
-    params, rms_rows, contours = _fit_contours(rec, notes, note_ids, max_candidates)
+    params, rms_rows, contours, hands = _fit_contours(rec, notes, note_ids, max_candidates)
     out = pd.DataFrame(dict(
         note_id=list(note_ids), recording_id=rid,
         note_index=notes["note_index"].to_numpy(np.int32), source_hash=source_hash,
@@ -92,7 +95,7 @@ def extract_take(recording: pd.DataFrame, annotation: pd.DataFrame | None, *,
         fit_rms_velocity=[r["bow_velocity"] for r in rms_rows],
         fit_rms_force=[r["bow_force"] for r in rms_rows],
         fit_rms_beta=[r["beta"] for r in rms_rows],
-        instrument=instrument,
+        instrument=instrument, left_hand=hands,
         true_onset=_column_or_nan(notes, "true_onset"),
         true_offset=_column_or_nan(notes, "true_offset"),
     ))
@@ -128,8 +131,8 @@ def _annotated_notes(rec: pd.DataFrame, annotation: pd.DataFrame, events,
 
 
 def _fit_contours(rec: pd.DataFrame, notes: pd.DataFrame, note_ids: np.ndarray,
-                  max_candidates: int) -> tuple[list, list, pd.DataFrame]:
-    """Fit each note's Bezier vector and cut its contour frames.
+                  max_candidates: int) -> tuple[list, list, pd.DataFrame, list]:
+    """Fit each note's Bezier vector and left-hand description and cut its contour frames.
 
     Returns
     -------
@@ -138,6 +141,9 @@ def _fit_contours(rec: pd.DataFrame, notes: pd.DataFrame, note_ids: np.ndarray,
         Fit RMS errors per parameter.
     contours : pandas.DataFrame
         Contour frames (time from the note's onset) with ``note_id`` and ``group``.
+    hands : list of (list of float or None)
+        Left-hand descriptions (:func:`gesture_db.left_hand.describe_left_hand`); None for
+        a note whose frames carry no ``pitch_deviation_cents``.
     """
     t = rec["time"].to_numpy()
     fs = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else 240.0
@@ -154,6 +160,9 @@ def _fit_contours(rec: pd.DataFrame, notes: pd.DataFrame, note_ids: np.ndarray,
         p, rms = fit_note(sig, grammars[groups[k]], max_candidates=max_candidates)
         params.append(p)
         rms_rows.append(rms)
+    cents = (rec["pitch_deviation_cents"].to_numpy(np.float64)
+             if "pitch_deviation_cents" in rec else np.full(len(rec), np.nan))
+    hands = describe_notes(cents, np.column_stack([i0, i1]), fs)
     counts = i1 - i0 + 1
     which = np.repeat(np.arange(len(notes)), counts)
     frames = (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
@@ -161,8 +170,9 @@ def _fit_contours(rec: pd.DataFrame, notes: pd.DataFrame, note_ids: np.ndarray,
     contours = pd.DataFrame({"note_id": note_ids[which],
                              "time": t[frames] - notes["onset"].to_numpy()[which],
                              **{c: cols[c][frames] for c in _CONTOUR_COLS},
+                             "pitch_deviation_cents": cents[frames],
                              "group": groups[which]})
-    return params, rms_rows, contours
+    return params, rms_rows, contours, hands
 
 
 def _blind_notes(rec: pd.DataFrame, events, facts: InstrumentFacts) -> pd.DataFrame:

@@ -14,6 +14,7 @@ Sources are picked by file name:
       bow_velocity = "vel_cm_s"
       bow_force = "force"
       beta = "beta"
+      pitch_deviation_cents = "pitch_dev"   # optional: the left hand's contour (cents)
       [scale]                    # optional factors to SI units
       bow_velocity = 0.01
       [defaults]                 # constants for columns the export lacks
@@ -256,6 +257,7 @@ def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame 
     data_path = _mapped_path(mapping)
     raw = _read_any(data_path).to_pandas()
     frame = pd.DataFrame(index=raw.index)
+    optional = {c.name for c in RECORDING.columns if not c.required}
     for name in RECORDING.column_names:
         if name == "recording_id":
             continue
@@ -270,6 +272,8 @@ def load_mapped(mapping: str | os.PathLike) -> tuple[pd.DataFrame, pd.DataFrame 
             frame[name] = _numbers(raw[name], data_path, name) * float(scale.get(name, 1.0))
         elif name in defaults:
             frame[name] = defaults[name]
+        elif name in optional:  # e.g. no left-hand contour: the column stays null
+            continue
         else:
             raise SchemaError(f"column '{name}' is neither mapped nor given a default",
                               source=str(mapping), column=name)

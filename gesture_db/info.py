@@ -26,7 +26,7 @@ def summarize(db: GestureDB) -> dict:
         ``feature_dim``, ``explained_variance`` and RMS errors), ``bezier_rms`` (mean RMS per
         parameter over notes, in the parameter's unit), ``pca_explained_variance`` (note-
         weighted mean over groups), ``median_boundary_error_ms`` and ``notes_found_share``
-        (None without ground truth).
+        (None without ground truth), ``left_hand`` (:func:`left_hand_summary`).
     """
     models = db.models()
     notes = db.notes()
@@ -55,7 +55,33 @@ def summarize(db: GestureDB) -> dict:
         pca_explained_variance=float(np.average(evr, weights=weights)) if len(models) else None,
         median_boundary_error_ms=seg.get("median_boundary_error_ms"),
         notes_found_share=seg.get("notes_found_share"),
-        groups=groups)
+        left_hand=left_hand_summary(notes), groups=groups)
+
+
+def left_hand_summary(notes: pd.DataFrame) -> dict | None:
+    """The notes' left-hand descriptions in figures (None when no note has one).
+
+    ``n_notes`` described; over the described stopped notes of at least 0.31 s
+    (``long_notes``, the long notes of ``pipelines.reports.vibrato``): ``vibrato_share``
+    (mean extent >= 3 cents), ``vibrato_extent_cents`` and ``vibrato_rate_hz`` (means over
+    those with vibrato), and ``intonation_spread_cents`` (standard deviation of the
+    intonation).
+    """
+    from gesture_db.left_hand import mean_extent, mean_rate, stopped_notes
+
+    if "left_hand" not in notes or not notes["left_hand"].notna().any():
+        return None
+    has = notes[notes["left_hand"].notna()]
+    long = has[(has["duration"] >= 0.31).to_numpy() & stopped_notes(has)]
+    d = [np.asarray(v, float) for v in long["left_hand"]]
+    extent = np.array([mean_extent(v) for v in d])
+    rate = np.array([mean_rate(v) for v in d])
+    vib = extent >= 3.0
+    return dict(n_notes=int(len(has)), long_notes=int(len(long)),
+                vibrato_share=float(vib.mean()) if len(d) else None,
+                vibrato_extent_cents=float(extent[vib].mean()) if vib.any() else None,
+                vibrato_rate_hz=float(rate[vib].mean()) if vib.any() else None,
+                intonation_spread_cents=float(np.std([v[0] for v in d])) if d else None)
 
 
 def mean_contours(db: GestureDB, group: str, n: int = 100) -> dict[str, np.ndarray]:
@@ -127,10 +153,20 @@ def format_summary(summary: dict) -> str:
         lines.append(f"segmentation: median boundary error "
                      f"{summary['median_boundary_error_ms']:.2f} ms, notes found "
                      f"{100 * summary['notes_found_share']:.2f} %")
+    hand = summary.get("left_hand")
+    if hand and hand["long_notes"]:
+        lines.append(f"left hand: {hand['n_notes']} notes described; of the "
+                     f"{hand['long_notes']} stopped of 0.31 s or more, "
+                     f"{100 * hand['vibrato_share']:.0f} % with vibrato"
+                     + (f" ({hand['vibrato_extent_cents']:.1f} cents peak at "
+                        f"{hand['vibrato_rate_hz']:.2f} Hz)" if hand["vibrato_extent_cents"]
+                        else "")
+                     + f", intonation spread {hand['intonation_spread_cents']:.1f} cents")
     frame = pd.DataFrame(summary["groups"]).T
     if not frame.empty:
         lines.append(frame.to_string(float_format=lambda v: f"{v:.4g}"))
     return "\n".join(lines)
 
 
-__all__ = ["format_summary", "mean_contours", "plot_groups", "summarize"]
+__all__ = ["format_summary", "left_hand_summary", "mean_contours", "plot_groups",
+           "summarize"]

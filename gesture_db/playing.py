@@ -10,7 +10,10 @@ recording and its annotation, with
   :class:`data_schemas.bow.BowBudget`, retakes in rests with the bow lifted);
 - context effects: speed with note length and dynamic, force with dynamic and string (the
   caller's per-string force factors), a crescendo over each run with sustained notes
-  tilting with it, accents on slur and run starts, the bow slowing before a leap; vibrato;
+  tilting with it, accents on slur and run starts, the bow slowing before a leap;
+- the left hand (:mod:`gesture_db.playing_left_hand`): intonation, vibrato and shifts in
+  the finger and recorded as ``pitch_deviation_cents``, drawn from a stream of their own
+  (``rng.spawn``) so the bowing signals are those the same seed gave before;
 - performer styles, trial-to-trial variability, timing deviations and sensor noise.
 
 Every random draw comes from a :class:`numpy.random.Generator`. The exact boundaries played
@@ -31,6 +34,7 @@ from data_schemas.annotation import validate_annotation
 from data_schemas.bow import BowBudget
 from data_schemas.instruments import dynamics_table, finger_ratio, instrument_facts, limits
 from data_schemas.recording import RECORDING, RECORDING_FRAME_RATE, validate_recording
+from gesture_db.playing_left_hand import left_hand_contour, measured_contour, vibrato_plan
 from gesture_db.script import INSTRUMENT
 from gesture_db.simulate_config import Performer, simulator_config
 from gesture_db.strokes import stroke
@@ -69,11 +73,15 @@ def play_script(script: pd.DataFrame, performer: Performer, rng: np.random.Gener
     annotation : pandas.DataFrame
         The :data:`data_schemas.annotation.ANNOTATION` rows with ground truth.
     """
+    hand_rng = rng.spawn(1)[0]  # the left hand's own stream: the bow's draws stay as they were
     plan = _plan_notes(script, performer, rng, force_factors)
+    hand = vibrato_plan(plan, performer, hand_rng, _semitones(plan))
+    plan = plan.assign(**{f"lh_{k}": v for k, v in hand.items()})
     total = float(plan["stop"].max()) + 1.0
     t = np.arange(0.0, total, 1.0 / frame_rate)
     sig = _render(plan, performer, rng, t)
     rec = _add_noise(sig, rng)
+    rec["pitch_deviation_cents"] = measured_contour(sig["pitch_deviation_cents"], hand_rng)
     rec["recording_id"] = recording_id
     rec["time"] = t
     recording = validate_recording(pd.DataFrame(rec), source=recording_id)
@@ -246,11 +254,12 @@ def _render(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator,
         stroke(plan, i, j, t, v, force, sl, rng, perf)
         i = j
     pos = _plan_bow(plan, v, force, sl, fs)
-    semis, string, beta = _left_hand(plan, perf, rng, t, sl)
+    semis, string, beta, cents = _left_hand(plan, perf, rng, t, sl)
     lh = simulator_config()["left_hand"]
     return dict(bow_velocity=v, bow_force=force, beta=np.clip(beta, *lh["beta_range"]),
                 bow_position=pos, string=string,
-                finger_ratio=finger_ratio(np.maximum(semis, 0.0)))
+                finger_ratio=finger_ratio(np.maximum(semis + cents / 100.0, 0.0)),
+                pitch_deviation_cents=cents)
 
 
 def _plan_bow(plan: pd.DataFrame, v: np.ndarray, force: np.ndarray, sl: Slicer,
@@ -303,19 +312,27 @@ def _plan_bow(plan: pd.DataFrame, v: np.ndarray, force: np.ndarray, sl: Slicer,
     return pos
 
 
+def _semitones(plan: pd.DataFrame) -> np.ndarray:
+    """Semitones of each planned note above its open string (0 = open string)."""
+    opens = np.asarray(instrument_facts(str(plan["instrument"].iloc[0])).open_strings)
+    return (plan["midi_pitch"].to_numpy() - opens[plan["string"]]).astype(np.float64)
+
+
 def _left_hand(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator, t: np.ndarray,
-               sl: Slicer) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Semitones (with vibrato), string and beta per frame.
+               sl: Slicer) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Nominal semitones, string, beta and the left hand's cents per frame.
 
     Finger and string change slightly before the bow (legato: at the onset); beta glides to
-    each note's value with a slow drift.
+    each note's value with a slow drift; the cents (intonation, vibrato, shifts) are
+    :func:`gesture_db.playing_left_hand.left_hand_contour`'s from the plan's ``lh_*``
+    columns.
     """
     cfg = simulator_config()["left_hand"]
     tech = plan["technique"].to_numpy()
     n = len(plan)
     on = plan["on"].to_numpy()
-    opens = np.asarray(instrument_facts(str(plan["instrument"].iloc[0])).open_strings)
-    semitone = plan["midi_pitch"].to_numpy() - opens[plan["string"]]
+    semitone = _semitones(plan)
+    phases = np.zeros(n)
     semis = np.zeros(t.size)
     string = np.full(t.size, int(plan["string"].iloc[0]), dtype=np.int8)
     beta = np.full(t.size, float(plan["beta"].iloc[0]))
@@ -332,17 +349,16 @@ def _left_hand(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator, t:
         string[s] = plan["string"].iloc[i]
         if plan["true_dur"].iloc[i] > cfg["vibrato_min_duration"] and \
                 tech[i] in ("detache", "legato"):
-            tt = t[s] - change[i]
-            depth = perf.vibrato * np.clip((tt - cfg["vibrato_delay"]) / cfg["vibrato_rise"],
-                                           0.0, 1.0)
-            semis[s] += depth * np.sin(2 * np.pi * cfg["vibrato_rate"] * tt
-                                       + rng.uniform(0, 2 * np.pi))
+            phases[i] = rng.uniform(0, 2 * np.pi)
         tt = t[s] - change[i]
         target = plan["beta"].iloc[i] * (1 + cfg["beta_drift"] * rng.normal() * tt)
         start_beta = beta[s.start - 1] if s.start > 0 else target
         w = np.clip(tt / cfg["beta_glide"], 0.0, 1.0)
         beta[s] = start_beta + (target - start_beta) * w
-    return semis, string, beta
+    cents = left_hand_contour(plan, {k: plan[f"lh_{k}"].to_numpy() for k in
+                                     ("intonation", "rate", "extent", "delay", "glide")},
+                              semitone, t, change, phases)
+    return semis, string, beta, cents
 
 
 def _add_noise(sig: dict[str, np.ndarray], rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -382,7 +398,9 @@ def _annotation(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator,
         bow_direction=np.where(plan["direction"] > 0, "down", "up"),
         slur_position=plan["slur_position"], run_position=plan["run_position"],
         tempo_bpm=plan["tempo_bpm"], performer=perf.name,
-        true_onset=plan["on"], true_offset=plan["true_offset"]))
+        true_onset=plan["on"], true_offset=plan["true_offset"],
+        true_intonation_cents=plan["lh_intonation"], true_vibrato_rate_hz=plan["lh_rate"],
+        true_vibrato_extent_cents=plan["lh_extent"]))
     return validate_annotation(frame, source=recording_id)
 
 

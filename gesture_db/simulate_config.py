@@ -44,8 +44,16 @@ class Performer:
         Overall tempo factor applied to note durations (> 1 = slower).
     force_dip : float
         Relative dip of the force at a bow change.
-    vibrato : float
-        Vibrato depth (semitones, peak) on long detache and legato notes.
+    vibrato_extent : float
+        Peak vibrato extent (cents) at mf on long detache and legato notes.
+    vibrato_rate : float
+        Vibrato rate (Hz) at mf.
+    vibrato_delay : float
+        Time (s) from a note's onset to the start of its vibrato.
+    intonation_sd : float
+        Standard deviation (cents) of the pitch offset from note to note.
+    shift_glide : float
+        Duration (s) of the slide into a shift (see :mod:`gesture_db.playing_left_hand`).
     staccato_fill : float
         Fraction of a staccato note during which the bow moves.
     finger_lead : float
@@ -67,7 +75,11 @@ class Performer:
     ioi_sd: float
     tempo_scale: float
     force_dip: float
-    vibrato: float
+    vibrato_extent: float
+    vibrato_rate: float
+    vibrato_delay: float
+    intonation_sd: float
+    shift_glide: float
     staccato_fill: float
     finger_lead: float
     crescendo: float

@@ -151,6 +151,12 @@ class GestureDB:
             raise SchemaError(f"no model for group '{group}'", source=str(self.path))
         return model_from_row(rows.iloc[0]), Grammar.from_json(rows.iloc[0]["grammar"])
 
+    def left_hand_model(self, group: str) -> GroupModel | None:
+        """The left-hand PCA/Gaussian of ``group``, None when its notes have none."""
+        models = self.models()
+        rows = models[models["group"] == group]
+        return left_hand_model_from_row(rows.iloc[0]) if len(rows) else None
+
     def quality(self) -> pd.DataFrame | None:
         """The judged samples of this generation (:data:`DB_QUALITY`), None if not judged."""
         path = quality_path(self.path, int(self.manifest["generation"]))
@@ -177,9 +183,24 @@ def quality_path(db: Path, generation: int) -> Path:
 
 
 def model_row(group: str, n_notes: int, grammar: Grammar, model: GroupModel,
-              rms: dict[str, float]) -> dict:
-    """One row of the group models table."""
-    return dict(group=group, n_notes=n_notes, grammar=grammar.to_json(),
+              rms: dict[str, float], left_hand: GroupModel | None = None,
+              n_left_hand: int = 0) -> dict:
+    """One row of the group models table.
+
+    ``left_hand`` is the group's left-hand block, fitted on ``n_left_hand`` notes.
+    """
+    hand: dict = {"left_hand_n_notes": 0}
+    if left_hand is not None:
+        hand = dict(left_hand_n_notes=n_left_hand, left_hand_feature_dim=left_hand.feature_dim,
+                    left_hand_param_mean=left_hand.param_mean.tolist(),
+                    left_hand_param_scale=left_hand.param_scale.tolist(),
+                    left_hand_components=left_hand.components.ravel().tolist(),
+                    left_hand_explained_variance_ratio=(
+                        left_hand.explained_variance_ratio.tolist()),
+                    left_hand_feature_mean=left_hand.feature_mean.tolist(),
+                    left_hand_feature_cov=left_hand.feature_cov.ravel().tolist(),
+                    left_hand_shrinkage=left_hand.shrinkage)
+    return dict(**hand, group=group, n_notes=n_notes, grammar=grammar.to_json(),
                 param_dim=model.param_dim, feature_dim=model.feature_dim,
                 param_mean=model.param_mean.tolist(), param_scale=model.param_scale.tolist(),
                 components=model.components.ravel().tolist(),
@@ -204,6 +225,23 @@ def model_from_row(row: pd.Series) -> GroupModel:
         shrinkage=float(row["shrinkage"]))
 
 
+def left_hand_model_from_row(row: pd.Series) -> GroupModel | None:
+    """The left-hand block of a group models row, None without one (or in a 1.1 database)."""
+    mean = row.get("left_hand_param_mean")
+    if mean is None or (isinstance(mean, float) and np.isnan(mean)):
+        return None
+    d = len(mean)
+    k = int(row["left_hand_feature_dim"])
+    return GroupModel(
+        param_mean=np.asarray(mean, float),
+        param_scale=np.asarray(row["left_hand_param_scale"], float),
+        components=np.asarray(row["left_hand_components"], float).reshape(k, d),
+        explained_variance_ratio=np.asarray(row["left_hand_explained_variance_ratio"], float),
+        feature_mean=np.asarray(row["left_hand_feature_mean"], float),
+        feature_cov=np.asarray(row["left_hand_feature_cov"], float).reshape(k, k),
+        shrinkage=float(row["left_hand_shrinkage"]))
+
+
 def remove_unlisted(db: Path, manifest: dict) -> None:
     """Delete generations and sources that the committed manifest no longer names."""
     gen = f"gen-{manifest['generation']}"
@@ -224,5 +262,6 @@ def remove_unlisted(db: Path, manifest: dict) -> None:
         f.unlink(missing_ok=True)
 
 
-__all__ = ["GestureDB", "contour_path", "model_from_row", "model_row", "quality_path",
+__all__ = ["GestureDB", "contour_path", "left_hand_model_from_row", "model_from_row",
+           "model_row", "quality_path",
            "read_source", "remove_unlisted", "source_notes_path", "write_source"]

@@ -188,8 +188,8 @@ def test_recording_frame_rate_outside_200_240_hz(tmp_path, capsys, rate):
     bad = _recording(int(2 * rate), rate)
     with pytest.raises(SchemaError, match="outside 200-240 Hz"):
         write_recording(bad, tmp_path / "refused.parquet")
-    pq.write_table(pa.Table.from_pandas(bad, schema=RECORDING.schema, preserve_index=False),
-                   path)
+    pq.write_table(pa.Table.from_pandas(bad.reindex(columns=RECORDING.column_names),
+                                        schema=RECORDING.schema, preserve_index=False), path)
     err = _arco_fails(capsys, "build-db", path, "-o", tmp_path / "db", "--workers", "1")
     assert str(path) in err and "'time'" in err and f"{rate:g} Hz" in err
     assert "200-240 Hz" in err

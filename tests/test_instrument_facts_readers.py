@@ -99,7 +99,7 @@ def test_performers_from_toml(tmp_path):
 def test_simulate_recordings_cli_takes_a_performers_config(tmp_path):
     from pipelines.cli.commands import simulate_recordings
 
-    (tmp_path / "p.toml").write_text('[[performer]]\nname = "solo"\nvibrato = 0.0\n')
+    (tmp_path / "p.toml").write_text('[[performer]]\nname = "solo"\nvibrato_extent = 0.0\n')
     parser = argparse.ArgumentParser()
     simulate_recordings.register(parser.add_subparsers())
     args = parser.parse_args(["simulate-recordings", "--notes", "20", "--performers", "1",

@@ -4,7 +4,9 @@ For each part the rules' front end (:func:`pipelines.perform.rules.build_events`
 string and finger choice, fermatas, slurs, bow directions, articulations) turns the notes
 into events; every bowed event becomes a sampling target (group = technique x direction x
 slur position x run position). The search (:mod:`gesture_db.search`) picks one database
-sample per target, :mod:`gesture_db.assemble` stretches and joins them into an actions table.
+sample per target, :mod:`gesture_db.assemble` stretches and joins them into an actions table
+and :mod:`pipelines.methods.sampling_left_hand` bends its finger with the sampled notes'
+vibrato and intonation.
 Without listening models (or with ``feedback=False``) the actions play open loop through
 :func:`synth.render_actions`; with models the listening controller
 (:mod:`synth.listening.controller`) corrects the sampled force hop by hop: each string's
@@ -31,6 +33,7 @@ from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.methods.sampling_db import SamplingDatabase, adapt_forces, open_database
+from pipelines.methods.sampling_left_hand import play_left_hand
 from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.rules import fermata_warp
 from pipelines.perform.timing import player_warp
@@ -187,15 +190,17 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
         transpose_octaves=transpose_octaves)
     correct_by_ear(events, _name, config)  # fingers where the notes sound in tune
     index, source, transfer = database.index_for(_name)
-    targets, _bowed = targets_from_events(events, notes, sampled_from=source)
+    targets, bowed = targets_from_events(events, notes, sampled_from=source)
     targets.attrs["instrument"] = source
     result = search(targets, index, predictors=database.predictors,
                     config=database.search_config)
     actions = assemble_actions(targets, result.choices, database.contours,
                                bow_length=instrument_facts(_name).bow_length)
     actions = adapt_forces(actions, _name, database.search_config, sampled_from=source)
+    actions, hand_warnings = play_left_hand(actions, targets, result.choices, bowed,
+                                            database.left_hand, config)
     actions = _extra_rows(actions, events)
-    warnings = [transfer] if transfer else []
+    warnings = ([transfer] if transfer else []) + hand_warnings
     warnings += [f"note group {g} is not in the database; sampled from {r}"
                  for g, r in sorted(result.fallbacks.items())]
     return Performance(actions, events_table(events, notes), warnings), targets, result.choices

@@ -36,6 +36,8 @@ class SamplingDatabase:
         Feature regressors (or None), contour reader and search settings.
     quality : pandas.DataFrame or None
         The judged samples (:data:`data_schemas.gesture_db.DB_QUALITY`).
+    left_hand : gesture_db.left_hand.LeftHandSource or None
+        The notes' left-hand descriptions (None: the rules' left hand for every note).
     """
 
     db: Any
@@ -44,6 +46,7 @@ class SamplingDatabase:
     contours: Any
     search_config: dict[str, Any]
     quality: pd.DataFrame | None = None
+    left_hand: Any = None
     _by_instrument: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -102,6 +105,7 @@ def open_database(path: str | os.PathLike, *, search_config: str | os.PathLike |
         No database at ``path`` or one of another schema version.
     """
     from gesture_db.assemble import ContourSource
+    from gesture_db.left_hand import LeftHandSource
     from gesture_db.predict import load_or_fit_predictors
     from gesture_db.search import SearchIndex
     from gesture_db.search_config import load_search_config
@@ -111,7 +115,8 @@ def open_database(path: str | os.PathLike, *, search_config: str | os.PathLike |
     pred = load_or_fit_predictors(db, progress=progress) if predictors else None
     quality = db.quality()
     return SamplingDatabase(db, SearchIndex.from_db(db, quality=quality), pred,
-                            ContourSource(db), load_search_config(search_config), quality)
+                            ContourSource(db), load_search_config(search_config), quality,
+                            LeftHandSource(db))
 
 
 def adapt_forces(actions: pd.DataFrame, instrument: str, search_config: dict[str, Any], *,
