@@ -230,3 +230,18 @@ def test_block_api_takes_the_touching_finger(touch, ratio):
     steady = np.concatenate(blocks)[int(0.5 * SR):].astype(np.float64)
     f0 = np.median(librosa.yin(steady, fmin=400.0, fmax=2500.0, sr=SR, frame_length=4096))
     assert abs(1200.0 * np.log2(f0 / (ratio * 440.0))) <= 10.0
+
+
+def test_gesture_sampling_keeps_a_harmonics_light_finger():
+    from pipelines.methods.sampling import _touches
+    from pipelines.perform.events import Event
+
+    actions = pd.DataFrame({"time": [0.0, 0.5, 1.0, 1.5, 0.5], "string": [1, 1, 1, 1, 2],
+                            "finger_ratio": 0.5})
+    harmonic = Event(rows=[0], t0=0.4, end=1.1, strings=[1], semitones=[12.0], dynamic=5.0,
+                     label="h", touch=True, node=2)
+    stopped = Event(rows=[1], t0=1.2, end=2.0, strings=[1], semitones=[12.0], dynamic=5.0,
+                    label="s")
+    out = _touches(actions, [harmonic, stopped])
+    assert out["finger_touch"].tolist() == [False, True, True, False, False]
+    assert "finger_touch" not in _touches(actions, [stopped])

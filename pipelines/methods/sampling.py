@@ -165,6 +165,24 @@ def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
     return validate_actions(table.reset_index(drop=True), source="gesture sampling")
 
 
+def _touches(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
+    """Natural harmonics: the rows of a touching event's string touch, not stop.
+
+    The database's notes were all stopped or open; a harmonic keeps the sampled bowing and
+    the rules' light finger (``finger_touch`` on its string from its start to its end).
+    """
+    touching = [e for e in events if e.touch]
+    if not touching:
+        return actions
+    actions = actions.copy()
+    touch = np.zeros(len(actions), bool)
+    t, s = actions["time"].to_numpy(), actions["string"].to_numpy()
+    for e in touching:
+        touch |= (s == e.strings[0]) & (t >= e.t0 - 2e-3) & (t <= e.end)
+    actions["finger_touch"] = touch
+    return actions
+
+
 def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[str, Any], *,
                 instrument: str | None = None, warp=None, transpose_octaves: bool = False,
                 rng: np.random.Generator | None = None) -> tuple[Performance, pd.DataFrame,
@@ -199,7 +217,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     actions = adapt_forces(actions, _name, database.search_config, sampled_from=source)
     actions, hand_warnings = play_left_hand(actions, targets, result.choices, bowed,
                                             database.left_hand, config)
-    actions = _extra_rows(actions, events)
+    actions = _touches(_extra_rows(actions, events), events)
     warnings = ([transfer] if transfer else []) + hand_warnings
     warnings += [f"note group {g} is not in the database; sampled from {r}"
                  for g, r in sorted(result.fallbacks.items())]
