@@ -1,13 +1,14 @@
 """Cluster-weighted sampling synthesis: replayed attacks and a harmonic sustain.
 
 Per note (see :mod:`synth.cws.notes`): the cluster that most likely produced the note's
-inputs at its onset (eq. 4) lends its sample. After a **bow change** the sample's first
-``attack_s`` is replayed, resampled to the target pitch by eq. 5's sinc and scaled by eq. 6
-(target volume over recorded volume); then a harmonic sustain (the sample's partial
-amplitudes at the target f0, seeded phases, the volume predicted by the model's volume
-expert over the time since the bow change) takes over through an eq. 7 alignment and an
-eq. 8 sin^2 cross-fade. A note **slurred** to its predecessor starts in the sustain, aligned
-to the previous note's sound and cross-faded with it. Every note ends with a sin^2 fade.
+inputs at its onset (eq. 4) lends its sample at the nearest semitone. After a **bow
+change** the sample's first ``attack_s`` is replayed, resampled to the target pitch by
+eq. 5's sinc and scaled by eq. 6 (target volume over recorded volume); then a harmonic
+sustain (the sample's partial amplitudes at the target f0, seeded phases, the volume
+predicted by the model's volume expert over the time since the bow change) takes over
+through an eq. 7 alignment and an eq. 8 sin^2 cross-fade. A note **slurred** to its
+predecessor starts in the sustain, aligned to the previous note's sound and cross-faded
+with it. Every note ends with a sin^2 fade.
 """
 
 from __future__ import annotations
@@ -118,8 +119,8 @@ def _voice(model: CwsModel, notes: pd.DataFrame, i: int, n: int, prev_tail: np.n
     row = notes.iloc[i]
     tau = np.arange(0.0, n / sample_rate + VOLUME_HOP_S, VOLUME_HOP_S)
     pred = model.cwm.predict(note_inputs(notes, tau, i, model))
-    sample = model.samples[int(model.cwm.most_likely_cluster(note_inputs(notes, tau[:1], i,
-                                                                         model))[0])]
+    cluster = int(model.cwm.most_likely_cluster(note_inputs(notes, tau[:1], i, model))[0])
+    sample = model.sample_for(cluster, float(row["midi_pitch"]))
     f0 = float(row["f0_hz"])
     if settings.intonation:
         f0 *= 2.0 ** (float(np.median(pred[:, 0])) / 1200.0)
