@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.instruments import instrument_facts, semitones_of
+from synth.voices import voice_count, voice_rows
 
 #: Bow slower than this (m/s) counts as stopped.
 STILL_MPS = 0.02
@@ -70,21 +71,7 @@ def _moving(a: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
 
 def voices(actions: pd.DataFrame) -> int:
     """Most strings bowed at one time in ``actions`` (0 when nothing is bowed)."""
-    bowed = actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)]
-    return int(bowed.groupby("time").size().max()) if len(bowed) else 0
-
-
-def _voice(a: pd.DataFrame, open_midi: np.ndarray, voice: int) -> pd.DataFrame:
-    """One row per time, the ``voice``-th highest-sounding string's (0: the top one).
-
-    Times where fewer strings are bowed have no row.
-    """
-    pitch = open_midi[a["string"].to_numpy(np.int64)] + semitones_of(
-        a["finger_ratio"].to_numpy(np.float64))
-    a = a.assign(_pitch=pitch).sort_values(["time", "_pitch"], ascending=[True, False],
-                                          kind="stable")
-    rank = a.groupby("time", sort=False).cumcount().to_numpy()
-    return a[rank == voice].drop(columns="_pitch").reset_index(drop=True)
+    return voice_count(actions)
 
 
 def action_notes(actions: pd.DataFrame, instrument: str = "violin", *,
@@ -120,8 +107,7 @@ def action_notes(actions: pd.DataFrame, instrument: str = "violin", *,
     [[0.0, 69.0, True], [0.5, 70.82, False], [0.7, 70.82, True]]
     """
     open_midi = np.asarray(instrument_facts(instrument).open_strings, np.float64)
-    a = _voice(actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)],
-               open_midi, voice)
+    a = voice_rows(actions, voice, instrument)
     if a.empty:
         return pd.DataFrame({c: [] for c in NOTE_COLUMNS})
     a, stopped = _moving(a)
