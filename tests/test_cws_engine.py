@@ -151,3 +151,26 @@ def test_a_two_voice_double_stop_sounds_both_pitches_at_their_solo_levels(db):
         level, freq = _peak_db(chord, RATE, f0)
         assert abs(1200 * np.log2(freq / f0)) < 10
         assert abs(level - _peak_db(solo, RATE, f0)[0]) < 1.5
+
+
+def test_the_sustain_follows_the_vibrato_in_the_finger(db):
+    """Truth: a finger moving +-30 cents at 5.5 Hz (pitch std 21 cents); the sustain (after
+    the replayed attack) carries it, a steady finger gives a steady pitch."""
+    import librosa
+
+    from data_schemas.instruments import finger_ratio
+
+    flat = phrase([2], note_s=1.5)
+    vib = flat.assign(finger_ratio=finger_ratio(
+        2 + 0.3 * np.sin(2 * np.pi * 5.5 * flat["time"].to_numpy())))
+    engine = get_engine("cws", "violin", sample_rate=RATE, seed=0, audio_db=db, n_clusters=4)
+
+    def cents(actions):
+        y = engine.render(actions, tail=0.2)[0][int(0.65 * RATE):int(1.4 * RATE)]
+        f0 = librosa.yin(y.astype(float), fmin=300, fmax=1200, sr=RATE, frame_length=1024,
+                         hop_length=128)
+        return 1200 * np.log2(f0 / (440 * 2 ** (2 / 12)))
+
+    assert np.std(cents(flat)) < 3
+    assert 15 < np.std(cents(vib)) < 27
+    assert abs(np.median(cents(vib))) < 10

@@ -125,21 +125,30 @@ class CwsEngine:
                ) -> list[tuple[pd.DataFrame, list[Any]]]:
         """Per voice its notes and their plans (cluster, sample, pitch, target volume).
 
+        The sustains follow the voice's pitch as the actions play it (vibrato included).
+
         Each string of a double stop or chord is its own voice (:func:`synth.cws.notes.
         action_notes` with ``voice``); :func:`synth.cws.synthesis.plan_notes` evaluates the
         model for all of a voice's notes at once.
         """
         from data_schemas.actions import validate_actions
+        from data_schemas.instruments import semitones_of
         from synth.cws.notes import action_notes, voices
         from synth.cws.synthesis import plan_notes
+        from synth.voices import voice_rows
 
         actions = validate_actions(actions)
         n = self._length(actions, tail)
         out = []
+        open_midi = np.asarray(instrument_facts(self.name).open_strings, np.float64)
         for voice in range(max(voices(actions), 1)):
             notes = action_notes(actions, self.name, voice=voice)
+            rows = voice_rows(actions, voice, self.name)
+            track = (rows["time"].to_numpy(np.float64),
+                     open_midi[rows["string"].to_numpy(np.int64)]
+                     + semitones_of(rows["finger_ratio"].to_numpy(np.float64)))
             out.append((notes, plan_notes(self.model, notes, n, self.sample_rate,
-                                          self.settings)))
+                                          self.settings, track if len(rows) else None)))
         return out
 
     def _length(self, actions: pd.DataFrame, tail: float) -> int:

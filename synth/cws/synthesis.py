@@ -20,7 +20,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from data_schemas.instruments import dynamics_table
-from synth.cws.harmonic_kernel import harmonic_sum
+from synth.cws.harmonic_kernel import harmonic_sum, harmonic_sum_phase
 from synth.cws.joins import align_offset, crossfade, fade_curve, scale_volume
 from synth.cws.resample_kernel import sinc_resample
 from synth.cws.training import ONSET_CLIP_S, CwsModel, Sample
@@ -75,11 +75,21 @@ def velocity_of(speed: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 def harmonic(sample: Sample, f0: float, n: int, sample_rate: int,
-             rng: np.random.Generator) -> np.ndarray:
-    """The sample's partials at ``f0`` (those below 0.45 x the rate), RMS 1, seeded phases."""
-    amps = sample.partials[: max(1, int(0.45 * sample_rate / f0))]
+             rng: np.random.Generator, ratio: np.ndarray | None = None) -> np.ndarray:
+    """The sample's partials at ``f0`` (those below 0.45 x the rate), RMS 1, seeded phases.
+
+    ``ratio`` (shape (n,)): the pitch contour, f0 x ratio at each sample (vibrato); the
+    partials kept are those below 0.45 x the rate at the contour's highest pitch.
+    """
+    top = f0 * (float(np.max(ratio)) if ratio is not None and ratio.size else 1.0)
+    amps = sample.partials[: max(1, int(0.45 * sample_rate / top))]
     phases = rng.uniform(0.0, 2.0 * np.pi, amps.size)
-    out = harmonic_sum(amps, phases, 2.0 * np.pi * f0 / sample_rate, n)
+    w = 2.0 * np.pi * f0 / sample_rate
+    if ratio is None or np.all(ratio == 1.0):
+        out = harmonic_sum(amps, phases, w, n)
+    else:
+        out = harmonic_sum_phase(amps, phases, w * np.concatenate([[0.0], np.cumsum(
+            ratio[:n - 1])]) if n else np.zeros(0))
     return out / max(np.sqrt(np.sum(amps ** 2) / 2.0), 1e-12)
 
 
@@ -119,6 +129,9 @@ class NotePlan:
         Target RMS volume (the volume expert plus the dynamic gain) every
         :data:`VOLUME_HOP_S` from the onset, past the note's end.
     bow_change : bool
+    contour : np.ndarray [shape=(m,)] or None
+        The sustain's pitch over ``f0_hz`` on the same grid (the actions' vibrato), or
+        None (a steady pitch).
     """
 
     index: int
@@ -129,6 +142,7 @@ class NotePlan:
     f0_hz: float
     level: np.ndarray
     bow_change: bool
+    contour: np.ndarray | None = None
 
 
 def _prepared(notes: pd.DataFrame, model: CwsModel) -> pd.DataFrame:
@@ -140,12 +154,15 @@ def _prepared(notes: pd.DataFrame, model: CwsModel) -> pd.DataFrame:
 
 
 def plan_notes(model: CwsModel, notes: pd.DataFrame, n_total: int, sample_rate: int,
-               settings: SynthesisSettings | None = None) -> list[NotePlan]:
+               settings: SynthesisSettings | None = None,
+               pitch_track: tuple[np.ndarray, np.ndarray] | None = None) -> list[NotePlan]:
     """The search: per playable note its cluster, sample, pitch and target volume.
 
     The model is evaluated once for all notes (their onsets for eq. 4, a
     :data:`VOLUME_HOP_S` grid along each note for the experts). Notes shorter than two
-    fades or starting after ``n_total`` are left out.
+    fades or starting after ``n_total`` are left out. ``pitch_track`` (times s, MIDI
+    pitch, ascending times): the pitch the actions play (vibrato included); each note's
+    sustain follows it within the note (held after its end) around the note's pitch.
     """
     settings = settings or SynthesisSettings()
     notes = _prepared(notes, model)
@@ -176,9 +193,18 @@ def plan_notes(model: CwsModel, notes: pd.DataFrame, n_total: int, sample_rate: 
         f = float(f0[i])
         if settings.intonation:
             f *= 2.0 ** (float(np.median(pred[j][:, 0])) / 1200.0)
+        contour = None
+        if pitch_track is not None:
+            # held from the note's last row on (at end_s a legato successor's row starts)
+            times = pitch_track[0]
+            last = times[max(np.searchsorted(times, notes.at[i, "end_s"]) - 1, 0)]
+            t0 = notes.at[i, "start_s"]
+            t = np.clip(t0 + taus[j], t0, max(last, t0))
+            contour = 2.0 ** ((np.interp(t, *pitch_track) - midi[i]) / 12.0)
         plans.append(NotePlan(int(i), int(n0[i]), int(n[j]), int(clusters[j]),
                               model.sample_for(int(clusters[j]), float(midi[i])), f,
-                              10.0 ** ((pred[j][:, 1] + gain[i]) / 20.0), bool(change[i])))
+                              10.0 ** ((pred[j][:, 1] + gain[i]) / 20.0), bool(change[i]),
+                              contour))
     return plans
 
 
@@ -194,7 +220,11 @@ def _voice(plan: NotePlan, prev_tail: np.ndarray | None, sample_rate: int,
                        plan.level)
     nf = int(round(settings.fade_s * sample_rate))
     lag = int(np.ceil(sample_rate / f0))
-    sustain = harmonic(sample, f0, n + nf + lag, sample_rate, rng)
+    ratio = None
+    if plan.contour is not None:
+        ratio = np.interp(np.arange(n + nf + lag) / sample_rate,
+                          VOLUME_HOP_S * np.arange(plan.contour.size), plan.contour)
+    sustain = harmonic(sample, f0, n + nf + lag, sample_rate, rng, ratio)
     sustain[: n] *= target
     sustain[n:] *= target[-1]
     if plan.bow_change or prev_tail is None:
