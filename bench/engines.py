@@ -7,7 +7,14 @@
   each, rests between some) played by the rules; the ``frames`` engine's search (targets,
   candidates, Viterbi) and whole render timed on the database just built (after a warm-up
   render that decodes the audio and compiles the kernel), the real-time factor, and
-  whether a second render is bit-identical.
+  whether a second render is bit-identical;
+- ``cws``: the same score through the ``cws`` engine on the same database: training (EM
+  and the samples, once per database), its search (notes of every voice, eq. 4's cluster,
+  the sample and the experts' pitch and volume of every note: ``CwsEngine.search``) and
+  whole render timed after a warm-up render, the real-time factor and bit-identity.
+
+Search and render are timed wall-clock and in this process's CPU seconds (``*_cpu_s``);
+the 1-minute load average is reported beside them.
 
 ``--json`` prints exactly one JSON object on stdout; progress goes to stderr.
 """
@@ -107,7 +114,35 @@ def run(args: argparse.Namespace) -> dict:
                          "load_average_1min": os.getloadavg()[0],
                          "action_rows": len(actions),
                          "bit_identical": bool(audio.tobytes() == again.tobytes())}
+        out["cws"] = _cws(db, actions)
     return out
+
+
+def _timed(fn) -> tuple[object, float, float]:
+    t0, c0 = time.perf_counter(), time.process_time()
+    got = fn()
+    return got, time.perf_counter() - t0, time.process_time() - c0
+
+
+def _cws(db: Path, actions: pd.DataFrame) -> dict:
+    """Training, search and render of the ``cws`` engine (see the module docstring)."""
+    from synth.engines import get_engine
+
+    say("cws: training ...")
+    engine = get_engine("cws", "violin", sample_rate=SAMPLE_RATE, audio_db=db)
+    _, t_train, c_train = _timed(lambda: engine.model)
+    engine.render(actions.iloc[:400])  # decode the samples' kernels, compile
+    say("cws: search and render ...")
+    _, t_search, c_search = _timed(lambda: engine.search(actions))
+    (audio, _), t_render, c_render = _timed(lambda: engine.render(actions))
+    again, _ = engine.render(actions)
+    return {"train_s": t_train, "train_cpu_s": c_train, "search_s": t_search,
+            "search_cpu_s": c_search, "render_s": t_render, "render_cpu_s": c_render,
+            "audio_s": audio.size / SAMPLE_RATE,
+            "real_time_factor": audio.size / SAMPLE_RATE / t_render,
+            "real_time_factor_cpu": audio.size / SAMPLE_RATE / c_render,
+            "load_average_1min": os.getloadavg()[0],
+            "bit_identical": bool(audio.tobytes() == again.tobytes())}
 
 
 def main(argv: list[str] | None = None) -> int:

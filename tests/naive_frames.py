@@ -33,3 +33,28 @@ def naive_viterbi_frames(cand, target_cost, features, successor, join_penalty):
         if cost < best:
             best, best_path = cost, np.array(path)
     return best_path, best
+
+
+def naive_nearest_candidates(targets, features, centroids, labels, k, n):
+    """The ``n`` nearest frames of each target within its ``k`` nearest clusters, by sorting.
+
+    Every distance computed, clusters ranked by a stable sort (ties: lower centroid), the
+    pool their members in ascending cluster then index order (all frames when it holds
+    fewer than ``n``), candidates by a stable sort of the distances (ties: pool order),
+    the last repeated when there are fewer than ``n``.
+    """
+    n_t = targets.shape[0]
+    cand = np.zeros((n_t, n), np.int64)
+    cost = np.zeros((n_t, n))
+    for t in range(n_t):
+        d_c = [float(np.sum((targets[t] - c) ** 2)) for c in centroids]
+        near = sorted(sorted(range(len(d_c)), key=lambda c: d_c[c])[:k])
+        pool = [j for c in near for j in range(len(labels)) if labels[j] == c]
+        if len(pool) < n:
+            pool = list(range(len(features)))
+        d = [float(np.sqrt(np.sum((targets[t] - features[j]) ** 2))) for j in pool]
+        best = sorted(range(len(pool)), key=lambda p: d[p])[:n]
+        best += [best[-1]] * (n - len(best))
+        cand[t] = [pool[p] for p in best]
+        cost[t] = [d[p] for p in best]
+    return cand, cost

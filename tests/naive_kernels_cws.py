@@ -26,3 +26,11 @@ def naive_harmonic_sum(amplitudes, phases, omega, n):
     h = np.arange(1, len(amplitudes) + 1)
     return (np.asarray(amplitudes) * np.sin(np.outer(k, h) * omega + np.asarray(phases))
             ).sum(axis=1) if n else np.zeros(0)
+
+
+def naive_harmonic_sum_phase(amplitudes, phases, theta):
+    """sum_h a_h sin(h theta_k + phi_h) with one sin per sample and partial."""
+    h = np.arange(1, len(amplitudes) + 1)
+    theta = np.asarray(theta, float)
+    return (np.asarray(amplitudes) * np.sin(np.outer(theta, h) + np.asarray(phases))
+            ).sum(axis=1) if theta.size else np.zeros(0)

@@ -147,3 +147,44 @@ def test_without_keeps_every_other_row_and_changes_the_cache_key(data, tmp_path)
     assert part.root == tmp_path / "sub"
     with pytest.raises(ParameterError, match="nothing is left"):
         without(part, "tones-b")
+
+
+def test_leave_one_performer_out_withholds_every_recording_of_the_performer(
+        tmp_path, monkeypatch):
+    import synth.engines
+
+    recs = {"ann_a": RECORDINGS["tones-a"], "ann_b": RECORDINGS["tones-b"],
+            "bob_a": [(64, 0.8), (66, 0.8), (68, 0.8)]}
+    root = write_dataset(tmp_path / "data", recs)
+    db = tmp_path / "db"
+    build_audio_database([root], db, workers=1, progress=False)
+    real_get = synth.engines.get_engine
+    seen = []
+
+    def spy(name, instrument="violin", **options):
+        seen.append(set(options["audio_db"].audio_paths))
+        return real_get(name, instrument, **options)
+
+    monkeypatch.setattr(synth.engines, "get_engine", spy)
+    res = compare_engines(["cws"], root, tmp_path / "r", audio_db=db, seconds=1.0,
+                          keep_audio=False, progress=False, leave_out="performer")
+    assert seen == [{"bob_a"}, {"bob_a"}, {"ann_a", "ann_b"}]     # ann_a, ann_b, bob_a
+    assert res["settings"]["leave_out"] == "performer"
+    seen.clear()
+    compare_engines(["cws"], root, tmp_path / "r2", audio_db=db, seconds=1.0,
+                    keep_audio=False, progress=False)
+    assert seen == [{"ann_b", "bob_a"}, {"ann_a", "bob_a"}, {"ann_a", "ann_b"}]
+    with pytest.raises(ParameterError, match="leave-out"):
+        compare_engines(["cws"], root, tmp_path / "r3", audio_db=db, leave_out="violin")
+
+
+def test_leave_one_performer_out_of_a_one_performer_database_is_refused(tmp_path, capsys):
+    root = write_dataset(tmp_path / "data", {"ann_a": RECORDINGS["tones-a"],
+                                             "ann_b": RECORDINGS["tones-b"]})
+    db = tmp_path / "db"
+    build_audio_database([root], db, workers=1, progress=False)
+    code = cli.main(["compare", "--engines", "cws", "--audio-db", str(db), "--recordings",
+                     str(root), "--seconds", "1", "--leave-out", "performer", "-o",
+                     str(tmp_path / "r"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "nothing is left" in err, err

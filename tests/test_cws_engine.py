@@ -127,3 +127,50 @@ def test_the_lower_string_of_a_double_stop_is_a_second_voice():
     assert len(lower) == 1 and lower["string"].iloc[0] == 1
     assert lower["midi_pitch"].iloc[0] == pytest.approx(62, abs=0.01)
     assert action_notes(high, voice=1).empty
+
+
+def _peak_db(x, rate, f0):
+    """Level (dB) of the spectral peak within 3 % of ``f0`` and its frequency."""
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), 1 << 18))
+    freqs = np.fft.rfftfreq(1 << 18, 1 / rate)
+    band = np.abs(freqs - f0) < 0.03 * f0
+    i = np.argmax(spec[band])
+    return 20 * np.log10(spec[band][i]), freqs[band][i]
+
+
+def test_a_two_voice_double_stop_sounds_both_pitches_at_their_solo_levels(db):
+    """Truth: each string played alone. In the double stop both fundamentals are there, at
+    their pitch (10 cents) and within 1.5 dB of their solo level."""
+    engine = get_engine("cws", "violin", sample_rate=RATE, seed=0, audio_db=db, n_clusters=4)
+    low, high = phrase([0], note_s=1.0, string=1), phrase([4], note_s=1.0, string=2)
+    both = pd.concat([low, high]).sort_values("time", kind="stable")
+    mid = slice(int(0.3 * RATE), int(0.9 * RATE))
+    chord = engine.render(both, tail=0.2)[0][mid].astype(float)
+    for alone, f0 in ((low, 440.0 * 2 ** (-7 / 12)), (high, 440.0 * 2 ** (4 / 12))):
+        solo = engine.render(alone, tail=0.2)[0][mid].astype(float)
+        level, freq = _peak_db(chord, RATE, f0)
+        assert abs(1200 * np.log2(freq / f0)) < 10
+        assert abs(level - _peak_db(solo, RATE, f0)[0]) < 1.5
+
+
+def test_the_sustain_follows_the_vibrato_in_the_finger(db):
+    """Truth: a finger moving +-30 cents at 5.5 Hz (pitch std 21 cents); the sustain (after
+    the replayed attack) carries it, a steady finger gives a steady pitch."""
+    import librosa
+
+    from data_schemas.instruments import finger_ratio
+
+    flat = phrase([2], note_s=1.5)
+    vib = flat.assign(finger_ratio=finger_ratio(
+        2 + 0.3 * np.sin(2 * np.pi * 5.5 * flat["time"].to_numpy())))
+    engine = get_engine("cws", "violin", sample_rate=RATE, seed=0, audio_db=db, n_clusters=4)
+
+    def cents(actions):
+        y = engine.render(actions, tail=0.2)[0][int(0.65 * RATE):int(1.4 * RATE)]
+        f0 = librosa.yin(y.astype(float), fmin=300, fmax=1200, sr=RATE, frame_length=1024,
+                         hop_length=128)
+        return 1200 * np.log2(f0 / (440 * 2 ** (2 / 12)))
+
+    assert np.std(cents(flat)) < 3
+    assert 15 < np.std(cents(vib)) < 27
+    assert abs(np.median(cents(vib))) < 10

@@ -15,7 +15,8 @@ def db():
 
 def test_samples_are_clean_notes_at_their_pitch(db):
     model = train(db, n_clusters=5, seed=0)
-    assert len(model.samples) == 5
+    assert model.pointers.shape == (5, model.pitches.size)
+    assert len(model.samples) == len(np.unique(model.pointers))
     assert "velocity" not in model.inputs           # all 64: no information, dropped
     for s in model.samples:
         note = db.notes[(db.notes.recording == s.recording) & (db.notes.note == s.note)].iloc[0]
@@ -23,6 +24,23 @@ def test_samples_are_clean_notes_at_their_pitch(db):
         assert abs(1200 * np.log2(s.f0_hz / want)) < 1.0
         assert s.audio.size == s.envelope.size > 0.25 * db.sample_rate
         assert s.partials[0] > s.partials[4]        # the fixture's partials fall as 1/h
+
+
+def test_each_cluster_points_at_a_note_of_every_covered_semitone(db):
+    """A note is played from a database note at its own semitone when there is one (the
+    fixture's pitches), else at the nearest covered semitone: never an octave away."""
+    model = train(db, n_clusters=5, seed=0)
+    table = frame_table(db)
+    covered = np.unique(db.notes.merge(table[clean_notes(db, table)][["recording", "note"]]
+                                       .drop_duplicates()).midi_pitch)
+    assert model.pitches.tolist() == covered.tolist()
+    for k in range(5):
+        for j, m in enumerate(model.pitches):
+            s = model.samples[model.pointers[k, j]]
+            assert abs(12 * np.log2(s.f0_hz / 440.0) + 69 - m) < 0.1
+        for want in (55.0, 63.2, 70.4, 90.0):
+            got = 12 * np.log2(model.sample_for(k, want).f0_hz / 440.0) + 69
+            assert abs(got - want) == pytest.approx(np.min(np.abs(covered - want)), abs=0.1)
 
 
 def test_overlapping_notes_are_not_candidates(db):

@@ -136,3 +136,29 @@ def test_cli_builds_the_database_and_renders_a_score_with_frames(tmp_path, capsy
     code = cli.main(["render", str(score), "--engine", "frames", "--audio-db",
                      str(tmp_path / "nowhere"), "-o", str(wav), "--quiet"])
     assert code == 2 and "--audio-db" in capsys.readouterr().err
+
+
+def _peak_db(x, f0):
+    """Level (dB) and frequency of the spectral peak within 3 % of ``f0``."""
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), 1 << 18))
+    freqs = np.fft.rfftfreq(1 << 18, 1 / SR)
+    band = np.abs(freqs - f0) < 0.03 * f0
+    i = np.argmax(spec[band])
+    return 20 * np.log10(spec[band][i]), freqs[band][i]
+
+
+def test_a_double_stop_sounds_both_strings_at_their_solo_levels(db):
+    """Truth: each string alone. In the double stop (open A4 and open E5, one row per
+    string) both fundamentals sound at their pitch and within 2 dB of their solo level."""
+    low = note_actions([69], seconds=1.0, string=2)
+    high = note_actions([69], seconds=1.0, string=3)    # note_actions' ratio: open E5
+    both = pd.concat([low, high]).sort_values("time", kind="stable", ignore_index=True)
+    engine = get_engine("frames", "violin", audio_db=db)
+    mid = slice(int(0.25 * SR), int(0.85 * SR))
+    chord = engine.render(both, tail=0.1)[0][mid].astype(float)
+    for alone, midi in ((low, 69), (high, 76)):
+        solo = engine.render(alone, tail=0.1)[0][mid].astype(float)
+        f0 = 440.0 * 2 ** ((midi - 69) / 12)
+        level, freq = _peak_db(chord, f0)
+        assert abs(1200 * np.log2(freq / f0)) < 10
+        assert abs(level - _peak_db(solo, f0)[0]) < 2.0

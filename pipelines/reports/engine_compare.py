@@ -5,7 +5,10 @@ For each annotated recording (a folder laid out like bach-violin: ``audio/``, ``
 ticks are milliseconds, read back as a score and performed by the rules (seed ``seed``,
 violin, octaves transposed into range); the one actions table is then played by every
 engine asked for. Engines built on recorded audio (``frames``, ``cws``) get the audio-frame
-database **without** that recording (:func:`pipelines.reports.leave_out.without`). Beside
+database **without** that recording (:func:`pipelines.reports.leave_out.without`), or with
+``leave_out="performer"`` without every recording of its performer (the recording name up
+to the first ``_``: a performer the database has never heard, as a recording from outside
+would be). Beside
 them: FluidR3 (the MIDI file through fluidsynth; figures null with the reason when it is
 missing) and the real recording itself (its ``mfcc_frechet`` is the floor: its mean
 distance to the other performers' recordings).
@@ -46,6 +49,24 @@ FIGURES = ("mfcc_frechet", "centroid_hz", "h6_10_db", "h11_20_db", "vibrato_shar
            "attack_ms", "level_range_db", "click_ratio", "pitch_error_cents",
            "real_time_factor")
 TAIL_S = 0.5
+#: What is left out of the database while a recording is measured.
+LEAVE_OUT = ("recording", "performer")
+
+
+def withheld(recording: str, names: Sequence[str], leave_out: str = "recording") -> list[str]:
+    """The recordings the engines must not hear while ``recording`` is measured.
+
+    Examples
+    --------
+    >>> names = ["ann_1", "ann_2", "bob_1"]
+    >>> withheld("ann_1", names), withheld("ann_1", names, "performer")
+    (['ann_1'], ['ann_1', 'ann_2'])
+    """
+    if leave_out not in LEAVE_OUT:
+        raise ParameterError(f"--leave-out {leave_out!r}: choose from {', '.join(LEAVE_OUT)}")
+    if leave_out == "recording":
+        return [recording]
+    return sorted(n for n in names if performer(n) == performer(recording))
 
 
 def check_engines(engines: Sequence[str], audio_db: object | None) -> list[str]:
@@ -137,10 +158,10 @@ def attack_ms(audio: np.ndarray, table) -> float | None:
 
 
 def play_engine(name: str, actions, db: Any, recording: str, seed: int,
-                workdir: Path) -> tuple[np.ndarray, dict[str, Any]]:
+                workdir: Path, leave_out: str = "recording") -> tuple[np.ndarray, dict[str, Any]]:
     """One engine's render of the actions and its real-time factor.
 
-    Database engines play ``db`` without ``recording`` (its caches in ``workdir``).
+    Database engines play ``db`` without :func:`withheld` (its caches in ``workdir``).
     """
     from synth.engines import get_engine
     from synth.render import render_actions
@@ -148,9 +169,10 @@ def play_engine(name: str, actions, db: Any, recording: str, seed: int,
     options: dict[str, Any] = {}
     info: dict[str, Any] = {}
     if name in DATABASE_ENGINES:
-        from pipelines.reports.leave_out import without
+        from pipelines.reports.leave_out import without_all
 
-        options["audio_db"] = without(db, recording, workdir / f"db-without-{recording}")
+        gone = withheld(recording, sorted(db.audio_paths), leave_out)
+        options["audio_db"] = without_all(db, gone, workdir / f"db-without-{'+'.join(gone)}")
         info["database_recordings"] = sorted(options["audio_db"].audio_paths)
     t0 = time.perf_counter()
     engine = get_engine(name, "violin", sample_rate=SAMPLE_RATE, seed=seed, **options)
@@ -174,7 +196,8 @@ def play_engine(name: str, actions, db: Any, recording: str, seed: int,
 
 def measure_recording(rec: recordings.Recording, engines: Sequence[str], db: Any, *,
                       seconds: float, seed: int, workdir: Path, keep: Path | None = None,
-                      log: Callable[..., None] = lambda *a: None) -> tuple[dict, np.ndarray]:
+                      log: Callable[..., None] = lambda *a: None,
+                      leave_out: str = "recording") -> tuple[dict, np.ndarray]:
     """Figures of every source for one left-out recording (and the real MFCC frames)."""
     table = recordings.first_seconds(
         recordings.read_aligned_notes(rec.notes, rec.alignment), seconds)
@@ -194,7 +217,7 @@ def measure_recording(rec: recordings.Recording, engines: Sequence[str], db: Any
                            "figures": {"real": real}, "engines": {}}
     sources = {}
     for name in engines:
-        audio, info = play_engine(name, actions, db, rec.name, seed, workdir)
+        audio, info = play_engine(name, actions, db, rec.name, seed, workdir, leave_out)
         out["engines"][name] = info
         sources[name] = (recordings.fit_length(audio, n), info["real_time_factor"])
     try:
@@ -280,8 +303,12 @@ def verdict(means: dict[str, dict[str, float | None]]) -> str:
 def compare_engines(engines: Sequence[str], recordings_dir: str | Path, out_dir: str | Path, *,
                     audio_db: str | Path | None = None, seconds: float = 30.0, seed: int = 0,
                     keep_audio: bool = True, progress: bool = True,
-                    log: Callable[..., None] = lambda *a: None) -> dict[str, Any]:
+                    log: Callable[..., None] = lambda *a: None,
+                    leave_out: str = "recording") -> dict[str, Any]:
     """Run the comparison and write its report into ``out_dir``.
+
+    ``leave_out``: ``"recording"`` (the database engines never hear the measured
+    recording) or ``"performer"`` (nor any other recording of its performer).
 
     The report: ``results.json``, ``index.html``, WAVs of every source and one bar chart
     per figure. Returns the results (``verdict`` included).
@@ -290,7 +317,8 @@ def compare_engines(engines: Sequence[str], recordings_dir: str | Path, out_dir:
     ------
     ParameterError
         Bad engines, a missing database, a recording the database does not hold, bad
-        recordings or ``seconds <= 0``.
+        recordings, ``seconds <= 0``, an unknown ``leave_out`` or (``"performer"``) a
+        performer who is all the database holds.
     """
     import tempfile
 
@@ -299,6 +327,7 @@ def compare_engines(engines: Sequence[str], recordings_dir: str | Path, out_dir:
     from pipelines.reports.engine_report import write_engine_report
 
     engines = check_engines(engines, audio_db)
+    withheld("", [], leave_out)  # checks the mode
     if not seconds > 0:
         raise ParameterError(f"--seconds {seconds} must be > 0")
     recs = recordings.dataset_recordings(recordings_dir)
@@ -322,17 +351,19 @@ def compare_engines(engines: Sequence[str], recordings_dir: str | Path, out_dir:
             per[rec.name], mfcc[rec.name] = measure_recording(
                 rec, engines, db if any(e in DATABASE_ENGINES for e in engines) else None,
                 seconds=seconds, seed=seed, workdir=Path(tmp),
-                keep=out if keep_audio else None, log=log)
+                keep=out if keep_audio else None, log=log, leave_out=leave_out)
             bar.update(1)
     floor = set_floor(per, mfcc)
     means = mean_figures(per)
     results = {"settings": {"engines": engines, "recordings": str(recordings_dir),
                             "audio_db": None if audio_db is None else str(audio_db),
-                            "seconds": seconds, "seed": seed, "sample_rate": SAMPLE_RATE},
+                            "seconds": seconds, "seed": seed, "sample_rate": SAMPLE_RATE,
+                            "leave_out": leave_out},
                "sources": ["real", *engines, "fluidr3"], "figures": list(FIGURES),
                "recordings": per, "mean": means, "floor_between_recordings": floor,
                "verdict": verdict(means)}
     return write_engine_report(results, out)
 
 
-__all__ = ["check_engines", "compare_engines", "measure_recording", "verdict"]
+__all__ = ["LEAVE_OUT", "check_engines", "compare_engines", "measure_recording", "verdict",
+           "withheld"]

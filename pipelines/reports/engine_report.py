@@ -80,7 +80,9 @@ def html_section(results: Mapping[str, Any], plots: Mapping[str, str]) -> str:
     imgs = "".join(f'<img src="{html.escape(p)}" alt="{html.escape(f)}">'
                    for f, p in plots.items())
     s = results["settings"]
-    return (f"<section><h2>Engines against real recordings (leave one recording out)</h2>"
+    mode = s.get("leave_out", "recording")
+    return (f"<section><h2>Engines against real recordings (leave one {html.escape(mode)} "
+            "out)</h2>"
             f"<p><b>{html.escape(results['verdict'])}</b></p>"
             f"<p>first {s['seconds']:g} s of each recording, rules' performance seed "
             f"{s['seed']}; means over {len(results['recordings'])} recordings; real = the "

@@ -86,6 +86,28 @@ def without(db: Any, recording: str, root: str | os.PathLike | None = None) -> A
     return dataclasses.replace(db, **changes)
 
 
+def without_all(db: Any, recordings: list[str], root: str | os.PathLike | None = None) -> Any:
+    """The database minus every one of ``recordings`` (:func:`without`, one at a time).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> @dataclasses.dataclass(frozen=True)
+    ... class Db:
+    ...     frames: pd.DataFrame
+    ...     notes: pd.DataFrame
+    ...     audio_paths: dict
+    ...     root: str = "db"
+    >>> t = pd.DataFrame({"recording": ["a", "b", "c"]})
+    >>> sub = without_all(Db(t, t, {"a": 1, "b": 2, "c": 3}), ["a", "b"])
+    >>> sorted(sub.audio_paths), sub.frames["recording"].tolist()
+    (['c'], ['c'])
+    """
+    for name in recordings:
+        db = without(db, name, root)
+    return db
+
+
 def shared_recordings_folder() -> Path:
     """The shared ``bach-violin`` folder (:func:`pipelines.shared_data.shared_data_dir`).
 
@@ -102,4 +124,4 @@ def shared_recordings_folder() -> Path:
         raise ParameterError(f"{exc}; or give --recordings DIR") from None
 
 
-__all__ = ["shared_recordings_folder", "without"]
+__all__ = ["shared_recordings_folder", "without", "without_all"]

@@ -121,33 +121,61 @@ class CwsEngine:
                              "blocks: use it without the listening loop (method rules or "
                              "sampling-open)")
 
+    def search(self, actions: pd.DataFrame, *, tail: float = 1.0
+               ) -> list[tuple[pd.DataFrame, list[Any]]]:
+        """Per voice its notes and their plans (cluster, sample, pitch, target volume).
+
+        The sustains follow the voice's pitch as the actions play it (vibrato included).
+
+        Each string of a double stop or chord is its own voice (:func:`synth.cws.notes.
+        action_notes` with ``voice``); :func:`synth.cws.synthesis.plan_notes` evaluates the
+        model for all of a voice's notes at once.
+        """
+        from data_schemas.actions import validate_actions
+        from data_schemas.instruments import semitones_of
+        from synth.cws.notes import action_notes, voices
+        from synth.cws.synthesis import plan_notes
+        from synth.voices import voice_rows
+
+        actions = validate_actions(actions)
+        n = self._length(actions, tail)
+        out = []
+        open_midi = np.asarray(instrument_facts(self.name).open_strings, np.float64)
+        for voice in range(max(voices(actions), 1)):
+            notes = action_notes(actions, self.name, voice=voice)
+            rows = voice_rows(actions, voice, self.name)
+            track = (rows["time"].to_numpy(np.float64),
+                     open_midi[rows["string"].to_numpy(np.int64)]
+                     + semitones_of(rows["finger_ratio"].to_numpy(np.float64)))
+            out.append((notes, plan_notes(self.model, notes, n, self.sample_rate,
+                                          self.settings, track if len(rows) else None)))
+        return out
+
+    def _length(self, actions: pd.DataFrame, tail: float) -> int:
+        end = float(actions["time"].max()) if len(actions) else 0.0
+        return int(round((end + tail) * self.sample_rate))
+
     def render(self, actions: pd.DataFrame, *, tail: float = 1.0, progress: bool = False,
                diagnostics: bool = False) -> tuple[np.ndarray, None]:
         """Play a whole actions table; float32 mono audio and no diagnostics.
 
-        Each string of a double stop or chord is its own voice (:func:`synth.cws.notes.
-        action_notes` with ``voice``), synthesized alone and mixed.
+        The voices of :meth:`search` are synthesized alone and mixed.
 
         Raises
         ------
         ParameterError
             Diagnostics asked for (this engine has none).
         """
-        from data_schemas.actions import validate_actions
-        from synth.cws.notes import action_notes, voices
         from synth.cws.synthesis import render_notes
 
         if diagnostics:
             raise ParameterError("engine 'cws' has no contact diagnostics")
-        actions = validate_actions(actions)
-        end = float(actions["time"].max()) if len(actions) else 0.0
-        n = int(round((end + tail) * self.sample_rate))
+        n = self._length(actions, tail)
         audio = np.zeros(n)
-        for voice in range(max(voices(actions), 1)):  # each string of a chord, mixed
-            notes = action_notes(actions, self.name, voice=voice)
+        for voice, (notes, plans) in enumerate(self.search(actions, tail=tail)):
             audio += render_notes(self.model, notes, n, self.sample_rate,
                                   seed=self.seed + voice, settings=self.settings,
-                                  progress=progress and voice == 0)
+                                  progress=progress and voice == 0, plans=plans)
         return audio.astype(np.float32), None
 
 

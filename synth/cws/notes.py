@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.instruments import instrument_facts, semitones_of
+from synth.voices import voice_count, voice_rows
 
 #: Bow slower than this (m/s) counts as stopped.
 STILL_MPS = 0.02
@@ -27,12 +28,6 @@ MAX_GAP_S = 0.05
 
 NOTE_COLUMNS = ("start_s", "end_s", "string", "f0_hz", "midi_pitch", "bow_speed",
                 "bow_force", "bow_direction", "bow_change")
-
-
-def _directions(v: np.ndarray) -> np.ndarray:
-    """Sign of the bow velocity, rows at rest taking the next moving row's sign."""
-    sign = pd.Series(np.where(np.abs(v) >= STILL_MPS, np.sign(v), np.nan))
-    return sign.bfill().ffill().fillna(1.0).to_numpy()
 
 
 def _boundaries(a: pd.DataFrame, stopped: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -44,16 +39,21 @@ def _boundaries(a: pd.DataFrame, stopped: np.ndarray) -> tuple[np.ndarray, np.nd
     pitch = semitones_of(a["finger_ratio"].to_numpy(np.float64))
     t = a["time"].to_numpy(np.float64)
     direction = np.sign(a["bow_velocity"].to_numpy(np.float64))
-    new = np.zeros(len(a), bool)
-    change = np.zeros(len(a), bool)
-    start_pitch = None
-    for i in range(len(a)):
-        gap = i == 0 or t[i] - t[i - 1] > MAX_GAP_S
-        rebow = i > 0 and (direction[i] != direction[i - 1] or stopped[i])
-        other = i > 0 and (string[i] != string[i - 1] or abs(pitch[i] - start_pitch) > 0.5)
-        if gap or rebow or other:
-            new[i], change[i] = True, gap or rebow
-            start_pitch = pitch[i]
+    change = np.ones(len(a), bool)            # gap or rebow (row 0: a gap)
+    change[1:] = (np.diff(t) > MAX_GAP_S) | (direction[1:] != direction[:-1]) | stopped[1:]
+    new = change.copy()
+    new[1:] |= string[1:] != string[:-1]
+    # a new finger within one bow and string: more than half a semitone from the note's
+    # first row (walked row by row only in stretches whose pitch moves that far)
+    starts = np.flatnonzero(new)
+    for i0, i1 in zip(starts, np.append(starts[1:], len(a)), strict=True):
+        seg = pitch[i0:i1]
+        if np.all(np.abs(seg - seg[0]) <= 0.5):
+            continue
+        start_pitch = seg[0]
+        for i, p in enumerate(seg.tolist()):
+            if abs(p - start_pitch) > 0.5:
+                new[i0 + i], start_pitch = True, p
     return new, change
 
 
@@ -71,21 +71,7 @@ def _moving(a: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
 
 def voices(actions: pd.DataFrame) -> int:
     """Most strings bowed at one time in ``actions`` (0 when nothing is bowed)."""
-    bowed = actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)]
-    return int(bowed.groupby("time").size().max()) if len(bowed) else 0
-
-
-def _voice(a: pd.DataFrame, open_midi: np.ndarray, voice: int) -> pd.DataFrame:
-    """One row per time, the ``voice``-th highest-sounding string's (0: the top one).
-
-    Times where fewer strings are bowed have no row.
-    """
-    pitch = open_midi[a["string"].to_numpy(np.int64)] + semitones_of(
-        a["finger_ratio"].to_numpy(np.float64))
-    a = a.assign(_pitch=pitch).sort_values(["time", "_pitch"], ascending=[True, False],
-                                          kind="stable")
-    rank = a.groupby("time", sort=False).cumcount().to_numpy()
-    return a[rank == voice].drop(columns="_pitch").reset_index(drop=True)
+    return voice_count(actions)
 
 
 def action_notes(actions: pd.DataFrame, instrument: str = "violin", *,
@@ -121,30 +107,30 @@ def action_notes(actions: pd.DataFrame, instrument: str = "violin", *,
     [[0.0, 69.0, True], [0.5, 70.82, False], [0.7, 70.82, True]]
     """
     open_midi = np.asarray(instrument_facts(instrument).open_strings, np.float64)
-    a = _voice(actions[(actions["bow_force"] > 0) & ~actions["pluck"].astype(bool)],
-               open_midi, voice)
+    a = voice_rows(actions, voice, instrument)
     if a.empty:
         return pd.DataFrame({c: [] for c in NOTE_COLUMNS})
     a, stopped = _moving(a)
     if a.empty:
         return pd.DataFrame({c: [] for c in NOTE_COLUMNS})
     new, change = _boundaries(a, stopped)
-    note_id = np.cumsum(new) - 1
     t = a["time"].to_numpy(np.float64)
+    semis = semitones_of(a["finger_ratio"].to_numpy(np.float64))
+    v = a["bow_velocity"].to_numpy(np.float64)
+    force = a["bow_force"].to_numpy(np.float64)
+    string = a["string"].to_numpy(np.int64)
+    starts = np.flatnonzero(new)
+    ends = np.append(starts[1:], len(a))          # one past each note's last row
     rows = []
-    for k in range(note_id[-1] + 1):
-        idx = np.flatnonzero(note_id == k)
-        nxt = idx[-1] + 1
-        joined = nxt < len(a) and t[nxt] - t[idx[-1]] <= MAX_GAP_S
-        end = t[nxt] if joined else t[idx[-1]]
-        s = int(a["string"].iloc[idx[0]])
-        midi = open_midi[s] + float(np.median(semitones_of(
-            a["finger_ratio"].to_numpy(np.float64)[idx])))
-        v = a["bow_velocity"].to_numpy(np.float64)[idx]
-        rows.append((t[idx[0]], max(end, t[idx[0]]), s, 440.0 * 2.0 ** ((midi - 69.0) / 12.0),
-                     midi, float(np.median(np.abs(v))),
-                     float(np.median(a["bow_force"].to_numpy(np.float64)[idx])),
-                     float(_directions(v)[0]), bool(change[idx[0]])))
+    for i0, i1 in zip(starts, ends, strict=True):
+        joined = i1 < len(a) and t[i1] - t[i1 - 1] <= MAX_GAP_S
+        end = t[i1] if joined else t[i1 - 1]
+        midi = open_midi[string[i0]] + float(np.median(semis[i0:i1]))
+        # every row moves (|v| >= STILL_MPS): the note's direction is its first row's
+        rows.append((t[i0], max(end, t[i0]), int(string[i0]),
+                     440.0 * 2.0 ** ((midi - 69.0) / 12.0), midi,
+                     float(np.median(np.abs(v[i0:i1]))), float(np.median(force[i0:i1])),
+                     float(np.sign(v[i0])), bool(change[i0])))
     return pd.DataFrame(rows, columns=list(NOTE_COLUMNS))
 
 

@@ -8,8 +8,13 @@ onset as one) and the bow direction (+1/-1 alternating note by note within a rec
 detached-bowing rule). The **outputs** are the pitch (f0's deviation from the note's MIDI
 pitch, cents) and the volume (frame RMS, dB re full scale). The third expert, the pointer into
 sample space (eq. 3), is for each cluster the aligned note whose frames have the highest
-mean ``log p(x, y | c_k)``; from that note the engine replays the attack and estimates the
-partial amplitudes of the sustain.
+mean ``log p(x, y | c_k)``, chosen **per semitone**: a cluster spans several octaves of
+pitch, and resampling one note by an octave or more moves the body's resonances with it
+(the first version, one note per cluster, played the left-out Andante's lower voice from
+notes 12-24 semitones higher). So each cluster points at its best note of every semitone
+the clean notes cover, and a note is played from its cluster's note of the nearest
+semitone; from that note the engine replays the attack and estimates the partial amplitudes
+of the sustain.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ OUTPUTS = ("pitch_deviation_cents", "energy_db")
 #: Time since onset is clipped here (s): later frames are all "sustain".
 ONSET_CLIP_S = 2.0
 #: Shortest note that may represent a cluster (s).
-MIN_SAMPLE_S = 0.25
+MIN_SAMPLE_S = 0.15
 #: Longest stretch of a note kept for replay (s).
 MAX_SAMPLE_S = 1.2
 #: A sample note must have at least this share of its length in voiced frames within
@@ -75,12 +80,20 @@ class Sample:
 class CwsModel:
     """A trained cluster-weighted sampler.
 
-    The CWM, its input columns and one sample per cluster.
+    The CWM, its input columns and its samples: ``pointers[k, j]`` is the index in
+    ``samples`` of cluster ``k``'s note at MIDI pitch ``pitches[j]``.
     """
 
     cwm: ClusterWeightedModel
     inputs: tuple[str, ...]
     samples: tuple[Sample, ...]
+    pitches: np.ndarray
+    pointers: np.ndarray
+
+    def sample_for(self, cluster: int, midi_pitch: float) -> Sample:
+        """Cluster ``cluster``'s sample at the semitone nearest ``midi_pitch``."""
+        j = int(np.argmin(np.abs(self.pitches - float(midi_pitch))))
+        return self.samples[int(self.pointers[int(cluster), j])]
 
     def features(self, table: pd.DataFrame) -> np.ndarray:
         """The model's input matrix from a table with the :data:`INPUTS` columns."""
@@ -167,10 +180,20 @@ def clean_notes(db: Any, table: pd.DataFrame) -> pd.Series:
 
 
 def choose_samples(db: Any, table: pd.DataFrame, cwm: ClusterWeightedModel,
-                   inputs: tuple[str, ...]) -> tuple[Sample, ...]:
-    """Eq. 3: per cluster, the note whose frames have the highest mean log p(x, y | c_k).
+                   inputs: tuple[str, ...]) -> tuple[tuple[Sample, ...], np.ndarray, np.ndarray]:
+    """Eq. 3 per semitone: for each cluster and MIDI pitch, the note with the best score.
 
-    Only notes that :func:`clean_notes` accepts are candidates.
+    The score of a note is the mean ``log p(x, y | c_k)`` of its frames; only notes that
+    :func:`clean_notes` accepts are candidates, grouped by their (rounded) MIDI pitch.
+
+    Returns
+    -------
+    samples : tuple of Sample
+        The distinct notes chosen.
+    pitches : np.ndarray [shape=(P,)]
+        The MIDI pitches the clean notes cover, ascending.
+    pointers : np.ndarray [shape=(K, P)], int64
+        Index in ``samples`` of each cluster's note at each pitch.
     """
     ok = table[clean_notes(db, table)]
     if ok.empty:
@@ -179,13 +202,21 @@ def choose_samples(db: Any, table: pd.DataFrame, cwm: ClusterWeightedModel,
     score = cwm.log_joint(ok[list(inputs)].to_numpy(float), ok[list(OUTPUTS)].to_numpy(float))
     per_note = pd.DataFrame(score).groupby([ok["recording"].to_numpy(),
                                             ok["note"].to_numpy()]).mean()
+    midi = ok.groupby(["recording", "note"])["midi_pitch"].first().reindex(per_note.index)
+    semitone = np.round(midi.to_numpy(float)).astype(np.int64)
+    pitches = np.unique(semitone)
+    pointers = np.zeros((cwm.n_clusters, pitches.size), np.int64)
+    chosen: dict[tuple, int] = {}
+    for j, m in enumerate(pitches):
+        block = per_note[semitone == m]
+        for k in range(cwm.n_clusters):
+            pointers[k, j] = chosen.setdefault(block[k].idxmax(), len(chosen))
     cache: dict = {}
-    out = []
-    for k in range(cwm.n_clusters):
-        rec, note = per_note[k].idxmax()
+    samples = []
+    for rec, note in chosen:        # insertion order = index order
         frames = ok[(ok["recording"] == rec) & (ok["note"] == note)]
-        out.append(_sample(db, cache, frames.iloc[0], frames))
-    return tuple(out)
+        samples.append(_sample(db, cache, frames.iloc[0], frames))
+    return tuple(samples), pitches.astype(np.float64), pointers
 
 
 def train(db: Any, *, n_clusters: int = 12, seed: int = 0,
@@ -221,7 +252,7 @@ def train(db: Any, *, n_clusters: int = 12, seed: int = 0,
     fit = table.iloc[::step]
     cwm = fit_cwm(fit[list(inputs)].to_numpy(float), fit[list(OUTPUTS)].to_numpy(float),
                   min(n_clusters, len(fit)), seed=seed)
-    return CwsModel(cwm, inputs, choose_samples(db, table, cwm, inputs))
+    return CwsModel(cwm, inputs, *choose_samples(db, table, cwm, inputs))
 
 
 __all__ = ["INPUTS", "OUTPUTS", "CwsModel", "Sample", "frame_table", "partial_amplitudes",

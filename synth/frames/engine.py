@@ -93,9 +93,11 @@ class FramesEngine:
         raise ParameterError("engine 'frames' renders whole actions tables only (render, "
                              "arco render/synth); it has no block mode")
 
-    def search(self, actions: pd.DataFrame, tail: float = 0.0
-               ) -> tuple[np.ndarray, np.ndarray, Any]:
+    def search(self, actions: pd.DataFrame, tail: float = 0.0,
+               reference: tuple[float, ...] = ()) -> tuple[np.ndarray, np.ndarray, Any]:
         """Targets and the chosen candidate (index into the frame index, -1 silent) per frame.
+
+        ``reference``: :func:`synth.frames.targets.derive_targets`'s (default: the table's).
 
         Returns
         -------
@@ -104,7 +106,7 @@ class FramesEngine:
         targets : synth.frames.targets.Targets
         """
         tg = derive_targets(actions, self.name, self.hop / self.sample_rate, self._profile,
-                            tail=tail)
+                            tail=tail, reference=reference)
         chosen = np.full(tg.times.size, -1, np.int64)
         on = np.flatnonzero(tg.sounding)
         if on.size == 0:
@@ -128,6 +130,10 @@ class FramesEngine:
                diagnostics: bool = False) -> tuple[np.ndarray, None]:
         """Play a whole actions table.
 
+        Where several strings are bowed at once (a double stop or chord) each string is a
+        voice of its own (:func:`synth.voices.voice_rows`), searched and overlap-added
+        alone, and the voices are mixed.
+
         Returns
         -------
         audio : np.ndarray, float32
@@ -136,11 +142,34 @@ class FramesEngine:
             The engine cannot measure contact diagnostics.
         """
         from data_schemas.actions import validate_actions
+        from synth.voices import voice_count, voice_rows
 
         actions = validate_actions(actions)
+        self.search_seconds = 0.0
+        if not len(actions):
+            return np.zeros(0, np.float32), None
+        end = float(actions["time"].max())
+        n = int(round((end + tail) * self.sample_rate))
+        n_voices = voice_count(actions)
+        parts = [actions] if n_voices <= 1 else [voice_rows(actions, v, self.name)
+                                                 for v in range(n_voices)]
+        # every voice's level and brightness relative to the whole table's loudest strings
+        ref = () if n_voices <= 1 else derive_targets(
+            actions, self.name, self.hop / self.sample_rate, self._profile).reference
+        out = np.zeros(n)
+        for k, part in enumerate(parts):
+            # every voice's grid runs to the table's end + tail
+            extra = tail if part is actions else end + tail - float(part["time"].max())
+            y = self._play(part, extra, progress and k == 0, ref)[:n]
+            out[:y.size] += y
+        return out.astype(np.float32), None
+
+    def _play(self, actions: pd.DataFrame, tail: float, progress: bool,
+              reference: tuple[float, ...] = ()) -> np.ndarray:
+        """One voice: search, then pitch-synchronous overlap-add (float64, unpadded)."""
         start = time.perf_counter()
-        chosen, sounding, tg = self.search(actions, tail)
-        self.search_seconds = time.perf_counter() - start
+        chosen, sounding, tg = self.search(actions, tail, reference)
+        self.search_seconds += time.perf_counter() - start
         frames = self.db.frames
         rows = self.index.rows
         rec = frames["recording"].to_numpy()
@@ -158,12 +187,8 @@ class FramesEngine:
                                 f0, float(self._energy[c]),
                                 prev >= 0 and self.index.successor[prev] == c))
             prev = c
-        y = overlap_add(grains, tg.f0, tg.energy_db, self.hop, self.db.sample_rate,
-                        self.sample_rate, progress=progress)
-        n = int(round((float(actions["time"].max()) + tail) * self.sample_rate)) \
-            if len(actions) else 0
-        y = y[:n] if y.size >= n else np.concatenate([y, np.zeros(n - y.size)])
-        return y.astype(np.float32), None
+        return overlap_add(grains, tg.f0, tg.energy_db, self.hop, self.db.sample_rate,
+                           self.sample_rate, progress=progress)
 
 
 __all__ = ["FramesEngine"]

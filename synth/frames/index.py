@@ -160,47 +160,34 @@ def candidates(index: FrameIndex, targets: np.ndarray, n: int = N_CANDIDATES
                ) -> tuple[np.ndarray, np.ndarray]:
     """The ``n`` nearest candidates of each whitened target within its nearest clusters.
 
+    The lookup is :func:`synth.frames.nearest_kernel.nearest_candidates` (one pass per
+    target over its clusters' members, keeping the ``n`` best).
+
     Returns
     -------
     cand : np.ndarray [shape=(T, n)], int64
         Candidate indices (into ``index.features``), nearest first.
     cost : np.ndarray [shape=(T, n)]
         Their distances to the target (the target cost).
+
+    Examples
+    --------
+    >>> f = np.array([[0.0, 0, 0], [1, 0, 0], [5, 0, 0], [6, 0, 0]])
+    >>> idx = FrameIndex(np.arange(4), f, np.full(4, -1), np.eye(3),
+    ...                  np.array([[0.5, 0, 0], [5.5, 0, 0]]), np.array([0, 0, 1, 1]))
+    >>> cand, cost = candidates(idx, np.array([[5.2, 0.0, 0.0]]), n=2)
+    >>> cand.tolist(), np.round(cost, 2).tolist()
+    ([[2, 3]], [[0.2, 0.8]])
     """
-    t = np.asarray(targets, np.float64)
-    d_c = ((t[:, None, :] - index.centroids[None]) ** 2).sum(-1)
-    k = min(N_NEAREST_CLUSTERS, index.centroids.shape[0])
-    near = np.sort(np.argsort(d_c, axis=1, kind="stable")[:, :k], axis=1)
-    members = index.members()
-    cand = np.zeros((t.shape[0], n), np.int64)
-    cost = np.zeros((t.shape[0], n))
-    keys, inverse = np.unique(near, axis=0, return_inverse=True)
-    for g, key in enumerate(keys):
-        pool = np.concatenate([members[c] for c in key])
-        if pool.size < n:  # tiny clusters: every candidate
-            pool = np.arange(index.features.shape[0])
-        group = np.flatnonzero(inverse.ravel() == g)
-        for start in range(0, group.size, CHUNK):
-            _nearest(t, index.features, pool, group[start:start + CHUNK], n, cand, cost)
-    return cand, cost
+    from synth.frames.nearest_kernel import nearest_candidates
 
-
-#: Target frames searched at once (bounds the distance matrix).
-CHUNK = 1024
-
-
-def _nearest(t: np.ndarray, features: np.ndarray, pool: np.ndarray, who: np.ndarray, n: int,
-             cand: np.ndarray, cost: np.ndarray) -> None:
-    """Fill ``cand`` and ``cost`` rows ``who`` with their ``n`` nearest frames of ``pool``."""
-    d = np.sqrt(((t[who, None, :] - features[pool][None]) ** 2).sum(-1))
-    m = min(n, pool.size)
-    part = np.argsort(d, axis=1, kind="stable")[:, :m]
-    idx = pool[part]
-    cand[who, :m] = idx
-    cost[who, :m] = np.take_along_axis(d, part, axis=1)
-    if m < n:
-        cand[who, m:] = idx[:, -1:]
-        cost[who, m:] = cost[who, m - 1:m]
+    order = np.argsort(index.labels, kind="stable").astype(np.int64)
+    bounds = np.searchsorted(index.labels[order],
+                             np.arange(index.centroids.shape[0] + 1)).astype(np.int64)
+    return nearest_candidates(np.ascontiguousarray(targets, np.float64),
+                              np.ascontiguousarray(index.features, np.float64),
+                              np.ascontiguousarray(index.centroids, np.float64), order,
+                              bounds, N_NEAREST_CLUSTERS, int(n))
 
 
 __all__ = ["FrameIndex", "N_CANDIDATES", "N_CLUSTERS", "build_index", "candidates",

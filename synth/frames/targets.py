@@ -33,7 +33,8 @@ class Targets:
     """Per-frame targets of a performance.
 
     ``times`` (s), ``f0`` (Hz), ``energy_db``, ``centroid_hz`` and ``sounding`` (bool);
-    unsounding frames hold NaN features.
+    unsounding frames hold NaN features. ``reference``: the medians (bow speed / beta,
+    force N, beta) that level and brightness are relative to (empty when nothing sounds).
     """
 
     times: np.ndarray
@@ -41,6 +42,7 @@ class Targets:
     energy_db: np.ndarray
     centroid_hz: np.ndarray
     sounding: np.ndarray
+    reference: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -95,8 +97,12 @@ def string_tracks(actions: pd.DataFrame, times: np.ndarray, n_strings: int
 
 
 def derive_targets(actions: pd.DataFrame, instrument: str, hop_s: float,
-                   profile: PitchProfile, *, tail: float = 0.0) -> Targets:
+                   profile: PitchProfile, *, tail: float = 0.0,
+                   reference: tuple[float, ...] = ()) -> Targets:
     """Target trajectories of an actions table on a grid of ``hop_s``.
+
+    Level and brightness are relative to ``reference`` (a :attr:`Targets.reference`, e.g.
+    the whole table's when this is one voice of it), else to this table's own medians.
 
     Examples
     --------
@@ -126,15 +132,17 @@ def derive_targets(actions: pd.DataFrame, instrument: str, hop_s: float,
     nan = np.full(times.size, np.nan)
     if not sounding.any():
         return Targets(times, nan, nan.copy(), nan.copy(), sounding)
-    ref_amp = np.median(amp[sounding])
-    ref_f, ref_b = np.median(force[sounding]), np.median(beta[sounding])
+    ref_amp, ref_f, ref_b = reference or (float(np.median(amp[sounding])),
+                                          float(np.median(force[sounding])),
+                                          float(np.median(beta[sounding])))
     with np.errstate(divide="ignore", invalid="ignore"):
         energy = base_e + 20 * np.log10(np.maximum(amp, 1e-9) / ref_amp)
         bright = ((np.maximum(force, 1e-6) / ref_f) * (ref_b / np.maximum(beta, 1e-6))
                   ) ** BRIGHTNESS_EXPONENT
     energy = np.clip(energy, *profile.energy_range)
     return Targets(times, np.where(sounding, f0, np.nan), np.where(sounding, energy, np.nan),
-                   np.where(sounding, base_c * bright, np.nan), sounding)
+                   np.where(sounding, base_c * bright, np.nan), sounding,
+                   (ref_amp, ref_f, ref_b))
 
 
 __all__ = ["PitchProfile", "Targets", "derive_targets", "string_tracks"]

@@ -75,6 +75,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                           "../shared/data/bach-violin next to the repository)")
     eng.add_argument("--seconds", type=float, default=30.0, metavar="S",
                      help="first S seconds of each recording (default 30)")
+    eng.add_argument("--leave-out", choices=("recording", "performer"), default="recording",
+                     help="what frames and cws do not get while a recording is measured: "
+                          "that recording (default) or every recording of its performer "
+                          "(the file name up to the first _)")
     p.set_defaults(func=run)
 
 
@@ -92,7 +96,7 @@ def run_engines(args: argparse.Namespace, say) -> int:
     with removed_on_failure(args.output):
         results = compare_engines(engines, folder, args.output, audio_db=args.audio_db,
                                   seconds=args.seconds, seed=seed, progress=not args.quiet,
-                                  log=say)
+                                  log=say, leave_out=args.leave_out)
     print(results["verdict"])
     say(f"wrote {args.output}/index.html, results.json, bars-*.png")
     return 0
