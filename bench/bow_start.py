@@ -15,7 +15,8 @@ Two measurements beside ``bench/playability.py`` (which bows every force from re
   force over 0.6 s after 0.1 s) beside the abrupt start of ``bench/playability.py``.
 
 ``--json`` prints one JSON object on stdout; ``--plot PNG`` draws the existence limits
-against the bowing-machine lines. About a minute on two cores.
+against the bowing-machine lines; ``--strings TOML`` measures string physics from another
+file in the format of ``synth/config/strings.toml``. About 10 s on two cores.
 """
 
 from __future__ import annotations
@@ -47,18 +48,26 @@ DOWN, UP = 1.0 / 200.0, 40.0
 BITE_TIME, SETTLE_TIME = 0.1, 0.6
 
 
+def constants(name: str, strings: str | None):
+    """The instrument's constants from ``strings`` (a strings TOML), or its name."""
+    from synth.strings import load_instrument
+
+    return name if strings is None else load_instrument(name, strings)
+
+
 def existence(cell: tuple) -> dict:
-    """Ramped F_min and F_max of one (instrument, string, v, beta) cell."""
+    """Ramped F_min and F_max of one (instrument, string, v, beta, strings) cell."""
     from synth.bow_starts import ramped_limit
 
-    name, s, v, beta = cell
+    name, s, v, beta, strings = cell
+    inst = constants(name, strings)
     middle = float((machine_f_min(beta) * machine_f_max(v, beta)) ** 0.5)
     for k in START_FACTORS:
         for a in START_ACCELERATIONS:
             kw = dict(bow_velocity=v, beta=beta, start_force=middle * k, acceleration=a)
-            low = ramped_limit(name, s, end_force=middle * k * DOWN, **kw)
+            low = ramped_limit(inst, s, end_force=middle * k * DOWN, **kw)
             if low is not None:
-                high = ramped_limit(name, s, end_force=middle * k * UP, **kw)
+                high = ramped_limit(inst, s, end_force=middle * k * UP, **kw)
                 return {"instrument": name, "string": s, "bow_velocity": v, "beta": beta,
                         "start_force": middle * k, "start_acceleration": a,
                         "f_min": low, "f_max": high}
@@ -67,18 +76,27 @@ def existence(cell: tuple) -> dict:
 
 
 def attack(case: tuple) -> dict:
-    """One player case: a player's attack and the abrupt start."""
+    """One player case (instrument, string, force, strings): a player's attack and the
+    abrupt start."""
     from synth.bow_starts import bitten_stroke
+    from synth.instrument import Instrument
+    from synth.playability import steady_stroke
+    from synth.playability_maps import PLAYER_BETA, PLAYER_VELOCITY
     from synth.strings import load_instrument
 
-    name, s, force = case
-    bite = load_instrument(name).strings[s].reference_force
-    bitten = bitten_stroke(name, s, bow_force=force, bite_force=bite, bite_time=BITE_TIME,
+    name, s, force, strings = case
+    inst = constants(name, strings)
+    bite = load_instrument(name, strings).strings[s].reference_force
+    bitten = bitten_stroke(inst, s, bow_force=force, bite_force=bite, bite_time=BITE_TIME,
                            settle_time=SETTLE_TIME)
-    abrupt = player_case(name, s, force)
+    if strings is None:
+        abrupt = player_case(name, s, force)["helmholtz"]
+    else:
+        abrupt = steady_stroke(Instrument(inst, body=None), s, bow_force=force,
+                               bow_velocity=PLAYER_VELOCITY, beta=PLAYER_BETA).is_helmholtz
     return {"instrument": name, "string": s, "bow_force": force, "bite_force": bite,
             "helmholtz_after_player_attack": bool(bitten),
-            "helmholtz_after_abrupt_start": abrupt["helmholtz"]}
+            "helmholtz_after_abrupt_start": bool(abrupt)}
 
 
 def cells_of(rows: list[dict]) -> list[dict]:
@@ -128,14 +146,15 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--plot", metavar="PNG", help="write the existence limits' plot here")
+    p.add_argument("--strings", metavar="TOML", help="string physics to measure instead")
     p.add_argument("--workers", type=int, default=2)
     args = p.parse_args(argv)
     t0 = time.perf_counter()
-    cells = [(n, s, v, b) for n, s in CELL_STRINGS for v in CELL_VELOCITIES
+    cells = [(n, s, v, b, args.strings) for n, s in CELL_STRINGS for v in CELL_VELOCITIES
              for b in CELL_BETAS]
     with ProcessPoolExecutor(args.workers) as pool:
         rows = list(pool.map(existence, cells))
-        attacks = list(pool.map(attack, player_cases()))
+        attacks = list(pool.map(attack, [(*c, args.strings) for c in player_cases()]))
     limits = cells_of(rows)
     result = {
         "existence": {"cells_within_factor_2": sum(c["pass"] for c in limits),

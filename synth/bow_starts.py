@@ -31,6 +31,7 @@ import numpy as np
 from synth.controls import BowControl
 from synth.instrument import Instrument
 from synth.playability import PERIOD_TOLERANCE
+from synth.strings import InstrumentConstants
 
 HOP = 256
 #: Blocks of Helmholtz motion required before a ramp starts (else no limit is found).
@@ -39,7 +40,7 @@ SETTLED_BLOCKS = 10
 JUDGED_PERIODS = 3
 
 
-def _onsets(instrument: str, string: int, beta: float, duration: float,
+def _onsets(instrument: str | InstrumentConstants, string: int, beta: float, duration: float,
             control: Callable[[float], tuple[float, float]], seed: int
             ) -> tuple[np.ndarray, np.ndarray, float]:
     """Slip-onset times, block start times and the string's nominal frequency."""
@@ -68,14 +69,15 @@ def _helmholtz_blocks(onsets: np.ndarray, starts: np.ndarray, f0: float) -> np.n
     return out
 
 
-def ramped_limit(instrument: str, string: int, *, bow_velocity: float, beta: float,
-                 start_force: float, end_force: float, acceleration: float = 0.5,
+def ramped_limit(instrument: str | InstrumentConstants, string: int, *, bow_velocity: float,
+                 beta: float, start_force: float, end_force: float, acceleration: float = 0.5,
                  hold: float = 0.4, ramp: float = 2.0, seed: int = 0) -> float | None:
     """Force (N) at which Helmholtz motion ends while the force glides to ``end_force``.
 
     Parameters
     ----------
-    instrument : str
+    instrument : str or InstrumentConstants
+        Instrument name, or constants to try (:func:`synth.strings.load_instrument`).
     string : int
         0 = lowest.
     bow_velocity : float, m/s
@@ -110,9 +112,9 @@ def ramped_limit(instrument: str, string: int, *, bow_velocity: float, beta: flo
     return float(control(starts[first + lost[0]])[1]) if lost.size else float(end_force)
 
 
-def bitten_stroke(instrument: str, string: int, *, bow_force: float, bite_force: float,
-                  bow_velocity: float = 0.3, beta: float = 0.1, bite_time: float = 0.1,
-                  settle_time: float = 0.6, acceleration: float = 5.0,
+def bitten_stroke(instrument: str | InstrumentConstants, string: int, *, bow_force: float,
+                  bite_force: float, bow_velocity: float = 0.3, beta: float = 0.1,
+                  bite_time: float = 0.1, settle_time: float = 0.6, acceleration: float = 5.0,
                   duration: float = 1.5, analysed: float = 0.5, seed: int = 0) -> bool:
     """Whether a light note started at ``bite_force`` settles in Helmholtz motion.
 
