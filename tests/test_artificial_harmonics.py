@@ -121,3 +121,50 @@ def test_artificial_stop_takes_the_stopped_note_two_octaves_below():
     string, semitones = artificial_stop(93.0, 3, violin, max_semitones=27.0)
     assert string == 2 and semitones == pytest.approx(5.0 - 0.0196, abs=1e-3)
     assert artificial_stop(60.0, 4, violin, max_semitones=27.0) is None  # C2: below G3
+
+
+@pytest.fixture(scope="module")
+def score_render(tmp_path_factory):
+    """A4 stopped with a D5 diamond (sounds A6), then D4 + G4 (D6), E4 + A4 (E6): rules."""
+    from music21 import chord, dynamics, stream, tempo
+    from music21 import instrument as m21instrument
+
+    from pipelines.methods.render import render_score
+
+    part = stream.Part(id="P1")
+    part.partName = "Violin"
+    part.insert(0, m21instrument.Violin())
+    measure = stream.Measure(number=1)
+    measure.insert(0, tempo.MetronomeMark(number=60))
+    measure.insert(0, dynamics.Dynamic("mf"))
+    for low, high in (("A4", "D5"), ("D4", "G4"), ("E4", "A4")):
+        c = chord.Chord([low, high], quarterLength=1.5)
+        c.notes[1].notehead = "diamond"
+        measure.append(c)
+    part.append(measure)
+    score = stream.Score()
+    score.insert(0, part)
+    path = tmp_path_factory.mktemp("art") / "artificial.musicxml"
+    score.write("musicxml", fp=str(path))
+    return render_score(path, method="rules", seed=0)
+
+
+def test_rules_stop_the_written_note_and_touch_a_fourth_above(score_render):
+    actions = score_render.parts[0].actions
+    sounding = actions[actions["bow_force"] > 0]
+    assert sounding["touch_ratio"].notna().all()
+    fr = sounding["finger_ratio"].to_numpy(np.float64)
+    tr = sounding["touch_ratio"].to_numpy(np.float64)
+    np.testing.assert_allclose(tr - fr, (1.0 - fr) / 4.0, atol=1e-6)  # 1/4 of the stopped
+    assert not sounding["finger_touch"].eq(True).any()
+    assert sounding["finger_ratio"].nunique() == 3  # one finger per note: no vibrato
+
+
+def test_rules_artificial_harmonics_sound_two_octaves_up(score_render):
+    audio = score_render.audio.astype(np.float64)
+    events = score_render.parts[0].events
+    for (t0, end), midi in zip(events[["t0", "end"]].to_numpy(), (93, 86, 88), strict=False):
+        target = 440.0 * 2.0 ** ((midi - 69) / 12.0)
+        seg = audio[int((t0 + 0.2) * SR):int((end - 0.05) * SR)]
+        f0 = librosa.yin(seg, fmin=target / 1.5, fmax=target * 1.5, sr=SR, frame_length=2048)
+        assert abs(1200.0 * np.log2(np.median(f0) / target)) <= 10.0
