@@ -204,8 +204,9 @@ class StringVoice:
         if not contact[-1] and np.all(np.abs(self.state[STATE_A]) < self._silent_level):
             self.reset()  # rung out: stop simulating until touched again
 
-    def _advance_one(self, bow_velocity, bow_force, contact, beta, finger_ratio, out,
-                     touch) -> None:
+    def _advance_one(self, bow_velocity: np.ndarray, bow_force: np.ndarray,
+                     contact: np.ndarray, beta: float, finger_ratio: float, out: StringOutput,
+                     touch: bool) -> None:
         """One finger at most: :func:`synth.modal_kernel.advance_string`."""
         packed, gains, fingered = self.coefficients(beta, finger_ratio, touch)
         spring = self.touch_spring if touch else self.finger_spring
@@ -222,8 +223,9 @@ class StringVoice:
                 break
             self._refill_noise()
 
-    def _advance_two(self, bow_velocity, bow_force, contact, beta, finger_ratio, touch_ratio,
-                     out) -> None:
+    def _advance_two(self, bow_velocity: np.ndarray, bow_force: np.ndarray,
+                     contact: np.ndarray, beta: float, finger_ratio: float, touch_ratio: float,
+                     out: StringOutput) -> None:
         """A stopping and a touching finger: :func:`advance_two_fingers`."""
         packed, rows, pair = self.two_finger_coefficients(beta, finger_ratio, touch_ratio)
         n = bow_velocity.size
