@@ -168,3 +168,19 @@ def test_rules_artificial_harmonics_sound_two_octaves_up(score_render):
         seg = audio[int((t0 + 0.2) * SR):int((end - 0.05) * SR)]
         f0 = librosa.yin(seg, fmin=target / 1.5, fmax=target * 1.5, sr=SR, frame_length=2048)
         assert abs(1200.0 * np.log2(np.median(f0) / target)) <= 10.0
+
+
+def test_gesture_sampling_adds_an_artificial_harmonics_touching_finger():
+    """Rows of the harmonic's string over the note touch at 1/n of the stopped length."""
+    from pipelines.methods.sampling import _touches
+    from pipelines.perform.events import Event
+
+    actions = pd.DataFrame({"time": [0.0, 0.5, 1.0, 1.5, 0.5], "string": [1, 1, 1, 1, 2],
+                            "finger_ratio": np.float32(FIFTH)})
+    harmonic = Event(rows=[0], t0=0.4, end=1.1, strings=[1], semitones=[7.0], dynamic=5.0,
+                     label="a", node=4)
+    out = _touches(actions, [harmonic])
+    touch = out["touch_ratio"].to_numpy(np.float64)
+    assert np.isnan(touch[[0, 3, 4]]).all()
+    np.testing.assert_allclose(touch[[1, 2]], FIFTH + (1.0 - FIFTH) / 4.0, rtol=1e-6)
+    assert not out["finger_touch"].any()
