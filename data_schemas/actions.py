@@ -16,7 +16,7 @@ import pyarrow as pa
 from data_schemas.io import read_frame, read_table, write_table
 from data_schemas.spec import Column, TableSpec, non_decreasing
 
-ACTIONS_VERSION = "1.1"
+ACTIONS_VERSION = "1.2"
 
 ACTIONS = TableSpec(
     name="actions",
@@ -57,6 +57,14 @@ ACTIONS = TableSpec(
                "harmonics) instead of stopping it; held from this row to the string's next "
                "row. Null or false = a stopping finger (tables written before 1.1 have no "
                "such column and load as stopped).", nullable=True, required=False),
+        Column("touch_ratio", pa.float32(), "1",
+               "A second, touching finger while finger_ratio stops the string (artificial "
+               "harmonics): its distance from the nut / the string length, between "
+               "finger_ratio and 1 (finger_ratio + (1 - finger_ratio) / n at the n-th "
+               "harmonic of the stopped length); held from this row to the string's next "
+               "row. Null = no second finger (tables written before 1.2 have no such column). "
+               "finger_touch stays the case of a light finger alone (natural harmonics).",
+               minimum=0.0, maximum=1.0, nullable=True, required=False),
     ),
     checks=(non_decreasing("time"),),
 )

@@ -27,7 +27,7 @@ from data_schemas.instruments import INSTRUMENT_NAMES
 from data_schemas.io import read_table, to_arrow, write_table
 from data_schemas.spec import Column, TableSpec
 
-NOTES_VERSION = "1.1"
+NOTES_VERSION = "1.2"
 
 #: Positions of a note in a slur or in a run of notes without rests.
 POSITIONS = ("init", "mid", "end", "iso")
@@ -145,6 +145,11 @@ NOTES = TableSpec(
                "the sounding pitch)."),
         Column("harmonic_type", pa.string(), "", "natural or artificial; null = not a harmonic.",
                nullable=True, required=False),
+        Column("harmonic_node", pa.int8(), "1",
+               "An artificial harmonic's number n: the touching finger at 1/n of the stopped "
+               "length (3 = a fifth, 4 = a fourth, 5 = a major third above the stopped note); "
+               "null = not given (4). Natural harmonics take n from their pitch and string.",
+               nullable=True, required=False, minimum=2, maximum=6),
         Column("ornament", pa.string(), "",
                "Ornament on the note: trill (tr or wavy line), mordent (lower neighbour), "
                "inverted_mordent (upper), turn, inverted_turn, delayed_turn, "

@@ -63,6 +63,9 @@ class StringInput:
         call).
     finger_touch : np.ndarray [shape=(n_sub_blocks,)], bool, optional
         Per sub-block, the finger only touches the string (None: it stops it throughout).
+    touch_ratio : np.ndarray [shape=(n_sub_blocks,)], optional
+        Per sub-block, a second, touching finger's distance from the nut / string length
+        while ``finger_ratio`` stops the string (NaN or None: no second finger).
     """
 
     bow_velocity: np.ndarray
@@ -74,6 +77,7 @@ class StringInput:
     pluck_pulls: tuple[float, ...] = ()
     steady_contact: bool = False
     finger_touch: np.ndarray | None = None
+    touch_ratio: np.ndarray | None = None
 
 
 @dataclass

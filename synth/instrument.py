@@ -343,18 +343,22 @@ class Instrument:
         given.bow_velocity = np.where(held, PLUCK_SPEED, given.bow_velocity)
 
     def _advance_runs(self, voice: StringVoice, given: StringInput, out: StringOutput) -> None:
-        """Call the kernel once per run of sub-blocks sharing beta and finger."""
-        touch = given.finger_touch
+        """Call the kernel once per run of sub-blocks sharing beta and fingers."""
+        touch, second = given.finger_touch, given.touch_ratio
         if given.steady_contact or (np.all(given.beta == given.beta[0]) and np.all(
                 given.finger_ratio == given.finger_ratio[0]) and (
-                    touch is None or np.all(touch == touch[0]))):
+                    touch is None or np.all(touch == touch[0])) and (
+                    second is None or np.array_equal(second, second[:1].repeat(second.size),
+                                                     equal_nan=True))):
             voice.advance(given.bow_velocity, given.bow_force, given.contact,
                           float(given.beta[0]), float(given.finger_ratio[0]), out,
-                          touch=touch is not None and bool(touch[0]))
+                          touch=touch is not None and bool(touch[0]),
+                          touch_ratio=_second_at(second, 0))
             return
         per_sub = SUB_BLOCK * self.oversample
         keys = np.stack([np.round(given.beta / 1e-4), np.round(given.finger_ratio / 1e-5)]
-                        + ([] if touch is None else [touch.astype(np.float64)]))
+                        + ([] if touch is None else [touch.astype(np.float64)])
+                        + ([] if second is None else [np.nan_to_num(second, nan=-1.0)]))
         change = np.flatnonzero(np.any(keys[:, 1:] != keys[:, :-1], axis=0)) + 1
         bounds = np.concatenate([[0], change, [keys.shape[1]]])
         n = given.bow_velocity.size
@@ -365,7 +369,15 @@ class Instrument:
             voice.advance(given.bow_velocity[lo:hi], given.bow_force[lo:hi],
                           given.contact[lo:hi], float(given.beta[a]),
                           float(given.finger_ratio[a]), view,
-                          touch=touch is not None and bool(touch[a]))
+                          touch=touch is not None and bool(touch[a]),
+                          touch_ratio=_second_at(second, a))
+
+
+def _second_at(touch_ratio: np.ndarray | None, i: int) -> float | None:
+    """The second finger's ``touch_ratio`` of sub-block ``i``, None when there is none."""
+    if touch_ratio is None or np.isnan(touch_ratio[i]):
+        return None
+    return float(touch_ratio[i])
 
 
 def _control_ranges() -> tuple[tuple[str, float, float, bool, bool, str], ...]:

@@ -48,9 +48,10 @@ SPRING_STIFFNESS, SPRING_DAMPING = 0, 1
 STATE_A, STATE_W = 0, 1
 #: Entries of the state carried between samples: the previous sample's contact forces (N)
 #: and the rosin's heating (dimensionless: the static friction's excess over mu_d is
-#: scaled by exp(-heating)).
-FORCE_BOW, FORCE_FINGER, ROSIN_HEATING = 0, 1, 2
-N_CARRIED = 3
+#: scaled by exp(-heating)); ``FORCE_TOUCH`` is the touching finger's force when a
+#: stopping finger is also down (:mod:`synth.two_finger_kernel`; unused here).
+FORCE_BOW, FORCE_FINGER, ROSIN_HEATING, FORCE_TOUCH = 0, 1, 2, 3
+N_CARRIED = 4
 
 
 @njit(cache=True, fastmath=_FAST, error_model="numpy")

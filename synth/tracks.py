@@ -5,7 +5,8 @@ rows of the same string (at a repeated time the later row wins, so steps are exa
 string is bowed from its first row to its last and where ``bow_force > 0``; after its last
 row the bow is lifted and the string rings on. ``finger_touch`` (a light finger at
 ``finger_ratio``, natural harmonics) is held from its row to the string's next row (null =
-stopped). ``pluck`` rows start a pluck whose strength
+stopped), and so is ``touch_ratio`` (a touching finger while ``finger_ratio`` stops the
+string: artificial harmonics; null = none). ``pluck`` rows start a pluck whose strength
 is the row's ``bow_force``: the string is pulled ``bow_force`` x 1 mm/N and let go at the row's
 time (0 N: the default 1 mm; the pull starts 10 ms per mm before).
 """
@@ -58,6 +59,7 @@ class StringTrack:
     pluck_times: np.ndarray  # when each pull starts, s (it lets go at its row's time)
     pluck_forces: np.ndarray
     finger_touch: np.ndarray | None = None  # per row (None: no row touches)
+    touch_ratio: np.ndarray | None = None  # per row, NaN = no second finger (None: no row)
 
     @classmethod
     def from_columns(cls, columns: dict[str, np.ndarray]) -> StringTrack:
@@ -76,10 +78,13 @@ class StringTrack:
         starts = columns["time"][pluck].astype(np.float64) - pluck_pull(strength) / PLUCK_SPEED
         touch = columns.get("finger_touch")
         touch = None if touch is None or not np.any(touch) else touch.astype(bool)
+        second = columns.get("touch_ratio")
+        second = (None if second is None or np.all(np.isnan(second))
+                  else second.astype(np.float64))
         return cls(time, columns["bow_velocity"].astype(np.float64), bow_force,
                    columns["beta"].astype(np.float64),
                    columns["finger_ratio"].astype(np.float64), np.maximum(starts, 0.0),
-                   strength, touch)
+                   strength, touch, second)
 
     def sample(self, column: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Linear interpolation of ``column`` at times ``t`` (held beyond the ends)."""
@@ -94,6 +99,13 @@ class StringTrack:
             return None
         k = np.searchsorted(self.time, t, side="right") - 1
         return self.finger_touch[np.clip(k, 0, None)]
+
+    def second_finger(self, t: np.ndarray) -> np.ndarray | None:
+        """``touch_ratio`` at times ``t`` (NaN = none), held like :meth:`touching`."""
+        if self.touch_ratio is None:
+            return None
+        k = np.searchsorted(self.time, t, side="right") - 1
+        return self.touch_ratio[np.clip(k, 0, None)]
 
     def inputs(self, start: int, n_out: int, inst: Any) -> StringInput:
         """Controls for output samples ``start .. start + n_out``."""
@@ -110,7 +122,8 @@ class StringTrack:
         pulls = tuple(float(p) for p in pluck_pull(self.pluck_forces[now]))
         return StringInput(velocity, force, contact, self.sample(self.beta, t_sub),
                            self.sample(self.finger_ratio, t_sub), offsets, pulls,
-                           finger_touch=self.touching(t_sub))
+                           finger_touch=self.touching(t_sub),
+                           touch_ratio=self.second_finger(t_sub))
 
 
 def play_actions(inst: Any, actions: pd.DataFrame, *, tail: float = DEFAULT_TAIL,
@@ -147,6 +160,8 @@ def play_actions(inst: Any, actions: pd.DataFrame, *, tail: float = DEFAULT_TAIL
     columns = {c: actions[c].to_numpy() for c in ("time", "bow_velocity", "bow_force",
                                                   "beta", "finger_ratio", "pluck")}
     columns["finger_touch"] = actions["finger_touch"].eq(True).to_numpy()
+    columns["touch_ratio"] = actions["touch_ratio"].to_numpy(dtype=np.float64,
+                                                             na_value=np.nan)
     order = np.argsort(strings, kind="stable")  # rows of each string, in table order
     tracks = {}
     for s in np.unique(strings):

@@ -16,6 +16,7 @@ from synth.modal import (
     state_scale,
 )
 from synth.modal_kernel import (
+    FORCE_TOUCH,
     HYPERBOLIC,
     N_CARRIED,
     STATE_A,
@@ -26,6 +27,8 @@ from synth.modal_kernel import (
 )
 from synth.strings import StringConstants
 from synth.torsion import torsion_mode_count
+from synth.two_finger_kernel import advance_two_fingers
+from synth.two_fingers import two_finger_coefficients
 
 #: Friction models by the name strings.toml uses.
 FRICTION_MODELS = {"hyperbolic": HYPERBOLIC, "thermal": THERMAL}
@@ -104,6 +107,8 @@ class StringVoice:
         self.finger_spring = pack_finger_spring(string.finger_stiffness, string.finger_damping)
         self.touch_spring = pack_finger_spring(string.touch_stiffness, string.touch_damping)
         self._cache: dict[tuple[int, int, bool], tuple[np.ndarray, np.ndarray, bool]] = {}
+        self._two_cache: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray,
+                                                          np.ndarray]] = {}
         self._noise = np.zeros(0)
         self._noise_used = np.zeros(1, np.int64)
         self.excited = False
@@ -132,6 +137,25 @@ class StringVoice:
             self._cache[key] = hit
         return hit
 
+    def two_finger_coefficients(self, beta: float, finger_ratio: float, touch_ratio: float):
+        """Packed coefficients, touching-finger rows and constants of two fingers down.
+
+        See :func:`synth.two_fingers.two_finger_coefficients`; cached like
+        :meth:`coefficients`.
+        """
+        key = (round(beta / BETA_RESOLUTION), round(finger_ratio / FINGER_RESOLUTION),
+               round(touch_ratio / FINGER_RESOLUTION))
+        hit = self._two_cache.get(key)
+        if hit is None:
+            if len(self._two_cache) >= _CACHE_SIZE:
+                self._two_cache.clear()
+            hit = two_finger_coefficients(self.basis, key[0] * BETA_RESOLUTION,
+                                          key[1] * FINGER_RESOLUTION,
+                                          key[2] * FINGER_RESOLUTION, self.finger_spring,
+                                          self.touch_spring, self.n_torsion)
+            self._two_cache[key] = hit
+        return hit
+
     def _refill_noise(self) -> None:
         """Replace the used-up friction noise with the next :data:`NOISE_BLOCK` draws.
 
@@ -144,7 +168,7 @@ class StringVoice:
 
     def advance(self, bow_velocity: np.ndarray, bow_force: np.ndarray, contact: np.ndarray,
                 beta: float, finger_ratio: float, out: StringOutput,
-                touch: bool = False) -> None:
+                touch: bool = False, touch_ratio: float | None = None) -> None:
         """Advance by ``bow_velocity.size`` samples at fixed beta and finger, writing ``out``.
 
         Parameters
@@ -161,6 +185,10 @@ class StringVoice:
         touch : bool
             The finger only touches the string at ``finger_ratio`` (light finger, with the
             string's touch spring-damper); beta then refers to the whole string.
+        touch_ratio : float, optional
+            A second, touching finger (touch spring-damper) at this distance from the nut /
+            string length while ``finger_ratio`` stops the string (artificial harmonics;
+            :mod:`synth.two_finger_kernel`). None: one finger at most.
         """
         if not self.excited and not contact.any():
             out.bridge_force[:] = 0.0
@@ -168,8 +196,21 @@ class StringVoice:
             out.stick_slip[:] = 0
             return
         self.excited = True
+        if touch_ratio is not None and finger_ratio > 0.0 and not touch:
+            self._advance_two(bow_velocity, bow_force, contact, beta, finger_ratio,
+                              touch_ratio, out)
+        else:
+            self._advance_one(bow_velocity, bow_force, contact, beta, finger_ratio, out, touch)
+        if not contact[-1] and np.all(np.abs(self.state[STATE_A]) < self._silent_level):
+            self.reset()  # rung out: stop simulating until touched again
+
+    def _advance_one(self, bow_velocity: np.ndarray, bow_force: np.ndarray,
+                     contact: np.ndarray, beta: float, finger_ratio: float, out: StringOutput,
+                     touch: bool) -> None:
+        """One finger at most: :func:`synth.modal_kernel.advance_string`."""
         packed, gains, fingered = self.coefficients(beta, finger_ratio, touch)
         spring = self.touch_spring if touch else self.finger_spring
+        self.carried[FORCE_TOUCH] = 0.0  # no touching finger beside a stopping one
         n = bow_velocity.size
         done = 0
         while True:
@@ -181,5 +222,20 @@ class StringVoice:
             if done == n:
                 break
             self._refill_noise()
-        if not contact[-1] and np.all(np.abs(self.state[STATE_A]) < self._silent_level):
-            self.reset()  # rung out: stop simulating until touched again
+
+    def _advance_two(self, bow_velocity: np.ndarray, bow_force: np.ndarray,
+                     contact: np.ndarray, beta: float, finger_ratio: float, touch_ratio: float,
+                     out: StringOutput) -> None:
+        """A stopping and a touching finger: :func:`advance_two_fingers`."""
+        packed, rows, pair = self.two_finger_coefficients(beta, finger_ratio, touch_ratio)
+        n = bow_velocity.size
+        done = 0
+        while True:
+            done += advance_two_fingers(self.state, self.carried, packed, rows, self.n_bridge,
+                                        pair, self.friction, bow_velocity[done:],
+                                        bow_force[done:], contact[done:], self._noise,
+                                        self._noise_used, out.bridge_force[done:],
+                                        out.slip_velocity[done:], out.stick_slip[done:])
+            if done == n:
+                break
+            self._refill_noise()

@@ -13,7 +13,8 @@ from synth.torsion import torsion_modes
 
 
 def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocity, bow_force,
-                 contact, rng, *, n_torsion=0, thermal=None, touch=False):
+                 contact, rng, *, n_torsion=0, thermal=None, touch=False,
+                 touch_ratio=None, touch_spring=(0.0, 0.0)):
     """Return (bridge force, slip velocity, stick-slip state) per sample, like the kernel.
 
     ``rng`` gives one uniform draw of friction noise per slipping sample, in order.
@@ -21,7 +22,9 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
     velocity to the bow point's; ``thermal = (rosin_heat J, cooling time s)`` replaces the
     hyperbolic curve by rosin friction that falls as the contact heats. ``touch``: the
     finger (at ``length * (1 - finger_ratio)`` from the bridge) only touches the string,
-    which keeps its whole length (beta and torsion on the whole string).
+    which keeps its whole length (beta and torsion on the whole string). ``touch_ratio``:
+    a second, touching finger (spring-damper ``touch_spring``) at
+    ``length * (1 - touch_ratio)`` from the bridge while ``finger_ratio`` stops the string.
     """
     length = basis.string.length
     finger_at = length * (1.0 - finger_ratio)
@@ -36,6 +39,9 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
     phi_b = basis.shape(beta * effective)
     fingered = finger_ratio > 0
     phi_f = basis.shape(finger_at) if fingered else np.zeros_like(phi_b)
+    two = touch_ratio is not None
+    phi_2 = basis.shape(length * (1.0 - touch_ratio)) if two else np.zeros_like(phi_b)
+    springs = [tuple(finger_spring), tuple(touch_spring)]
     c_aa, c_av, c_va, c_vv = basis.free
     g, h = basis.force_to_displacement, basis.force_to_velocity
     mu_s, mu_d, v0_nominal, depth = friction
@@ -51,12 +57,24 @@ def naive_string(basis, beta, finger_ratio, friction, finger_spring, bow_velocit
         vt_free = t_va * a_t + t_vv * v_t
 
         def end_state(f_bow, f_finger, a_free=a_free, v_free=v_free):
-            modal_force = phi_b * f_bow + phi_f * f_finger
+            f_1, f_2 = (f_finger, 0.0) if np.isscalar(f_finger) else f_finger
+            modal_force = phi_b * f_bow + phi_f * f_1 + phi_2 * f_2
             return a_free + g * modal_force, v_free + h * modal_force
 
         def finger_force(f_bow):
             if not fingered:
                 return 0.0
+            if two:
+                # Each finger: F_i = -K_i y_i - R_i y'_i, y linear in (F_1, F_2): a 2x2 system
+                # written out from the end states at F = 0 and at unit forces.
+                def residual(f):
+                    a_e, v_e = end_state(f_bow, f)
+                    return np.array([f[i] + springs[i][0] * (phi @ a_e)
+                                     + springs[i][1] * (phi @ v_e)
+                                     for i, phi in enumerate((phi_f, phi_2))])
+                r0 = residual(np.zeros(2))
+                jac = np.stack([residual(np.eye(2)[j]) - r0 for j in range(2)], axis=1)
+                return np.linalg.solve(jac, -r0)
             # F_f = -K y_f - R y'_f with y_f, y'_f linear in F_f: solve the scalar equation.
             a0, v0 = end_state(f_bow, 0.0)
             a1, v1 = end_state(f_bow, 1.0)

@@ -36,7 +36,8 @@ def test_schema_carries_units_descriptions_and_version(tmp_path):
 @given(st.integers(1, 40), st.sampled_from([".parquet", ".csv"]))
 def test_round_trip(tmp_path_factory, n, suffix):
     path = tmp_path_factory.mktemp("rt") / f"a{suffix}"
-    original = table(n).assign(finger_touch=np.arange(n) % 3 == 1)
+    original = table(n).assign(finger_touch=np.arange(n) % 3 == 1,
+                               touch_ratio=np.where(np.arange(n) % 2 == 1, 0.3, np.nan))
     write_actions(original, path)
     back = read_actions(path)
     pd.testing.assert_frame_equal(back, original.astype(back.dtypes.to_dict()), check_exact=False,

@@ -103,8 +103,9 @@ def test_a_touching_finger_is_not_a_stopping_one():
 
 
 def _old_table(path, frame: pd.DataFrame) -> None:
-    """Write ``frame`` as an actions file of schema 1.0 (no finger_touch column)."""
-    fields = [c.to_field() for c in ACTIONS.columns if c.name != "finger_touch"]
+    """Write ``frame`` as an actions file of schema 1.0 (no finger_touch nor touch_ratio)."""
+    fields = [c.to_field() for c in ACTIONS.columns
+              if c.name not in ("finger_touch", "touch_ratio")]
     meta = dict(ACTIONS.schema.metadata)
     meta[b"arco_schema_version"] = b"1.0"
     table = pa.Table.from_pandas(frame, preserve_index=False).cast(pa.schema(fields))

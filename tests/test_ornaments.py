@@ -81,7 +81,7 @@ def test_marks_are_read(reading):
     assert natural["string_indication"] == 1  # the diamond D5 touches the D string's node
     artificial = first.loc[16.0]  # D4 stopped, G4 touched: two octaves above D4
     assert artificial["harmonic_type"] == "artificial" and artificial["midi_pitch"] == 86
-    assert artificial["chord_size"] == 1
+    assert artificial["chord_size"] == 1 and artificial["harmonic_node"] == 4  # a fourth
     second = notes[notes["movement"] == 2]
     trill = second[second["ornament"] == "trill"].iloc[0]
     assert trill["midi_pitch"] == 78 and trill["ornament_upper"] == 1  # F#5 -> G5 in D
@@ -106,8 +106,8 @@ def test_unperformed_marks_are_reported(reading):
                     strict=True))
     assert (5, "text", "dolce") in found
     assert any(k == "expression:Schleifer" for _, k, _ in found)
-    assert (5, "artificial harmonic", "played stopped at its sounding pitch") in found
-    assert len(unperformed) == 3
+    assert not any(k == "artificial harmonic" for _, k, _ in found)  # now performed
+    assert len(unperformed) == 2
 
 
 def test_trill_alternates_with_the_upper_note_at_the_tempo_rate(finger, plain_config):
@@ -270,9 +270,8 @@ def test_arco_notes_lists_movements_and_warnings(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "2 movement(s)" in out and "1 'Allegro': measures 1-5" in out
     assert "2 'Adagio': measures 1-2" in out
-    assert "warnings: 3 mark(s) read and not performed" in out
-    assert ("artificial harmonic 'played stopped at its sounding pitch' not performed (m. 5)"
-            in out)
+    assert "warnings: 2 mark(s) read and not performed" in out
+    assert "artificial harmonic" not in out
     assert "movement 1: text 'dolce' not performed (m. 5)" in out
     assert "expression:Schleifer 'schleifer' not performed (m. 5)" in out
     assert cli.main(["notes", str(path), "--movement", "2", "-o",

@@ -166,20 +166,29 @@ def _extra_rows(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
 
 
 def _touches(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
-    """Natural harmonics: the rows of a touching event's string touch, not stop.
+    """Harmonics: the rows of a harmonic's string touch, or stop and touch.
 
     The database's notes were all stopped or open; a harmonic keeps the sampled bowing and
-    the rules' light finger (``finger_touch`` on its string from its start to its end).
+    the rules' fingers: a natural one's light finger (``finger_touch``), an artificial one's
+    touching finger at 1/n of the stopped length (``touch_ratio``), on its string from its
+    start to its end.
     """
-    touching = [e for e in events if e.touch]
-    if not touching:
+    harmonics = [e for e in events if e.node]
+    if not harmonics:
         return actions
     actions = actions.copy()
     touch = np.zeros(len(actions), bool)
+    second = np.full(len(actions), np.nan)
     t, s = actions["time"].to_numpy(), actions["string"].to_numpy()
-    for e in touching:
-        touch |= (s == e.strings[0]) & (t >= e.t0 - 2e-3) & (t <= e.end)
+    ratio = actions["finger_ratio"].to_numpy(dtype=np.float64)
+    for e in harmonics:
+        rows = (s == e.strings[0]) & (t >= e.t0 - 2e-3) & (t <= e.end)
+        if e.touch:
+            touch |= rows
+        else:
+            second[rows] = ratio[rows] + (1.0 - ratio[rows]) / e.node
     actions["finger_touch"] = touch
+    actions["touch_ratio"] = second.astype(np.float32)
     return actions
 
 

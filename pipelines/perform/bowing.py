@@ -24,7 +24,7 @@ from pipelines.perform.expression import string_cents
 from pipelines.perform.ornaments import ornament_cents
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
-            "bow_position", "pluck", "finger_touch")
+            "bow_position", "pluck", "finger_touch", "touch_ratio")
 _MAX_FINGER = limits().max_finger_ratio  # the actions table's limit (about 28 semitones)
 _TICK = 0.0005  # s between a frame and its neighbour that changes finger or lifts the bow
 
@@ -237,7 +237,7 @@ def _force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float) -> np.
         force = force * tech["col_legno_force"]
     if len(e.strings) > 1:
         force = force * art["double_stop_force"]
-    if e.touch:
+    if e.node:  # a harmonic, natural or artificial
         force = force * config["harmonics"]["force"]
     if e.accent != 1.0:
         decay = np.clip(1.0 - (t - e.t0) / art["accent_time"], 0.0, 1.0)
@@ -257,7 +257,8 @@ def _beta(e: Event, t: np.ndarray, config: dict[str, Any]) -> np.ndarray:
         beta = beta * config["techniques"]["sul_ponticello_beta"]
     elif e.technique == "sul_tasto":
         beta = beta * config["techniques"]["sul_tasto_beta"]
-    if e.touch:  # a natural harmonic: the bow's place on the sounding segment (L / n)
+    if e.node:  # a harmonic: the bow's place on the sounding segment (1/n of the vibrating
+        # length: the whole string for a natural one, the stopped length for an artificial)
         harm = config["harmonics"]
         beta = np.maximum(beta * harm["segment_beta"] / e.node, harm["min_beta"])
     return np.clip(beta, 0.02, 0.45)
@@ -312,7 +313,7 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                 rows.append(_rows(t[m], string, semis, force[m], s.direction * speed[m],
                                   beta[m], pos[m], cents=string_cents(e, semis, t[m], config)
                                   + ornament_cents(e.ornament, t[m], floor=-100.0 * semis),
-                                  touch=e.touch))
+                                  **_fingers(e)))
             if k == last:
                 rows.extend(_after_stroke(events, k, t, force, beta, pos))
             elif t.size:
@@ -320,7 +321,7 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                 for string, semis in zip(e.strings, e.semitones, strict=True):
                     if string not in nxt.strings:  # string crossing inside a slur
                         rows.append(_lift(seg_end, string, semis, float(beta[-1]),
-                                          float(pos[-1]), touch=e.touch))
+                                          float(pos[-1]), **_fingers(e)))
     for e in events:
         if e.pizz:
             rows.extend(_pluck(e, config))
@@ -334,23 +335,38 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
 
 def _rows(t: np.ndarray, string: int, semis: float, force: np.ndarray, velocity: np.ndarray,
           beta: np.ndarray, pos: np.ndarray, pluck: bool = False,
-          cents: np.ndarray | None = None, touch: bool = False) -> dict[str, np.ndarray]:
+          cents: np.ndarray | None = None, touch: bool = False,
+          node: int = 0) -> dict[str, np.ndarray]:
     """Rows of one string; ``cents`` (vibrato) bends the finger row by row.
 
-    ``touch``: the finger only touches the string (a natural harmonic).
+    ``touch``: the finger only touches the string (a natural harmonic). ``node``: an
+    artificial harmonic's n, a second finger touching at 1/n of the stopped length
+    (``touch_ratio``; 0 = none, null).
     """
     n = t.size
     pitch = np.full(n, semis) if cents is None else semis + np.asarray(cents) / 100.0
-    return {"time": t, "string": np.full(n, string, np.int8),
-            "finger_ratio": np.minimum(finger_ratio(pitch), _MAX_FINGER).astype(np.float32),
+    ratio = np.minimum(finger_ratio(pitch), _MAX_FINGER).astype(np.float32)
+    second = (ratio.astype(np.float64) + (1.0 - ratio) / node if node
+              else np.full(n, np.nan))
+    return {"time": t, "string": np.full(n, string, np.int8), "finger_ratio": ratio,
             "bow_force": np.maximum(force, 0.0), "bow_velocity": velocity, "beta": beta,
-            "bow_position": pos, "pluck": np.full(n, pluck), "finger_touch": np.full(n, touch)}
+            "bow_position": pos, "pluck": np.full(n, pluck), "finger_touch": np.full(n, touch),
+            "touch_ratio": second.astype(np.float32)}
 
 
 def _lift(t: float, string: int, semis: float, beta: float, pos: float, *,
-          touch: bool = False) -> dict[str, np.ndarray]:
+          touch: bool = False, node: int = 0) -> dict[str, np.ndarray]:
     return _rows(np.array([t]), string, semis, np.zeros(1), np.zeros(1), np.array([beta]),
-                 np.array([pos]), touch=touch)
+                 np.array([pos]), touch=touch, node=node)
+
+
+def _fingers(e: Event) -> dict[str, Any]:
+    """The left hand's keywords of :func:`_rows` for event ``e``.
+
+    A light finger alone (``touch``) or an artificial harmonic's n (``node``: a touching
+    finger beside the stopping one).
+    """
+    return {"touch": e.touch, "node": 0 if e.touch else e.node}
 
 
 def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: np.ndarray,
@@ -367,12 +383,12 @@ def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: np.ndarray,
         if same and not e.rest_after:
             if nxt.t0 - _TICK > end + _TICK:
                 out.append(_rows(np.array([nxt.t0 - _TICK]), string, semis, force[-1:],
-                                 np.zeros(1), beta[-1:], pos[-1:], touch=e.touch))
+                                 np.zeros(1), beta[-1:], pos[-1:], **_fingers(e)))
             continue
         lift = end + _TICK
         if nxt is not None and string in nxt.strings and lift >= nxt.t0 - _TICK:
             continue
-        out.append(_lift(lift, string, semis, float(beta[-1]), float(pos[-1]), touch=e.touch))
+        out.append(_lift(lift, string, semis, float(beta[-1]), float(pos[-1]), **_fingers(e)))
     return out
 
 
@@ -385,10 +401,10 @@ def _pluck(e: Event, config: dict[str, Any]) -> list[dict[str, np.ndarray]]:
     for j, (string, semis) in enumerate(members):
         t = e.t0 + 0.01 * j
         out.append(_rows(np.array([t]), string, semis, strength, np.zeros(1),
-                         np.array([beta]), np.array([0.5]), pluck=True, touch=e.touch))
+                         np.array([beta]), np.array([0.5]), pluck=True, **_fingers(e)))
         if e.end - _TICK > t + _TICK:
             out.append(_rows(np.array([e.end - _TICK]), string, semis, np.zeros(1), np.zeros(1),
-                             np.array([beta]), np.array([0.5]), touch=e.touch))
+                             np.array([beta]), np.array([0.5]), **_fingers(e)))
     return out
 
 

@@ -10,6 +10,11 @@ finger position and lane level: ``bench/calibrate_pitch.py`` writes
 stopped note's finger by the measured error (interpolated between levels, at the nearest
 calibrated position) before the expressive offset and the vibrato are heard. Open strings
 are tuned by the instrument itself (``synth/config/strings.toml``) and are left alone.
+
+An artificial harmonic's ear hears the stopped length's n-th partial, which a stiff string
+sounds sharp of n times its first by 600 log2((1 + B n**2) / (1 + B)) cents, B = pi**2 EI /
+(T L_s**2) on the stopped length L_s (:func:`partial_stretch_cents`): its stopping finger,
+placed for the stopped note, is moved down by that much more.
 """
 
 from __future__ import annotations
@@ -110,6 +115,10 @@ def correct_by_ear(events: list, instrument: str, config: dict[str, Any],
         level = 5.0 if e.pizz else float(e.dynamic)
         e.semitones = [_placed(cal, s, q, level) for s, q in zip(e.strings, e.semitones,
                                                                   strict=True)]
+        if e.node:  # an artificial harmonic: tuned on its n-th partial
+            e.semitones = [max(q - partial_stretch_cents(instrument, s, q, e.node) / 100.0,
+                               OPEN_SEMITONES) for s, q in zip(e.strings, e.semitones,
+                                                               strict=True)]
         e.roll = [(s, _placed(cal, s, q, level)) for s, q in e.roll]
         moved += sum(q > OPEN_SEMITONES for q in e.semitones)
     return moved
@@ -122,4 +131,33 @@ def _placed(cal: PitchCalibration, string: int, semitones: float, level: float) 
     return max(semitones - cal.cents(string, semitones, level) / 100.0, OPEN_SEMITONES)
 
 
-__all__ = ["PitchCalibration", "correct_by_ear", "load_pitch_calibration"]
+def partial_stretch_cents(instrument: str, string: int, semitones: float, n: int) -> float:
+    """How sharp (cents) a stiff string's n-th partial is of n times its first.
+
+    Parameters
+    ----------
+    instrument : str
+    string : int
+        String index (0 = lowest).
+    semitones : float
+        Stopping finger, semitones above the open string (stopped length L 2**(-s/12)).
+    n : int
+        Partial number.
+
+    Examples
+    --------
+    >>> round(partial_stretch_cents("violin", 1, 7.0, 1), 6)
+    0.0
+    >>> partial_stretch_cents("violin", 1, 7.0, 4) > partial_stretch_cents("violin", 1, 0.0, 4)
+    True
+    """
+    from synth.strings import load_instrument
+
+    const = load_instrument(instrument).strings[string]
+    stopped = const.length * 2.0 ** (-semitones / 12.0)
+    b = np.pi**2 * const.bending_stiffness / (const.tension * stopped**2)
+    return float(600.0 * np.log2((1.0 + b * n * n) / (1.0 + b)))
+
+
+__all__ = ["PitchCalibration", "correct_by_ear", "load_pitch_calibration",
+           "partial_stretch_cents"]

@@ -21,7 +21,9 @@ class Event:
     vibrato (:mod:`pipelines.perform.expression`) and ``ornament`` its trill, mordent or
     turn (:mod:`pipelines.perform.ornaments`). ``touch``: a natural harmonic, the finger
     only touches its string at the ``node``-th harmonic's node (``semitones`` is that point,
-    :mod:`pipelines.perform.harmonics`).
+    :mod:`pipelines.perform.harmonics`); ``node`` without ``touch``: an artificial
+    harmonic, the finger stops the string at ``semitones`` and a second one touches it at
+    1/``node`` of the stopped length.
     """
 
     rows: list[int]

@@ -15,6 +15,16 @@ Settings are ``[harmonics]`` in ``rules.toml``: ``highest_node`` (the highest n 
 whole string is the dynamic's beta / n, at least ``min_beta`` (measured: the violin A
 string's 4th harmonic at beta 0.025 slips four times a period; from 0.04 on it speaks).
 Natural harmonics get no vibrato, intonation offset, ornament or portamento.
+
+An artificial harmonic (``harmonic_type`` ``"artificial"``) is the n-th harmonic of a
+stopped length: the first finger stops the string at the stopped note (``midi_pitch`` minus
+12 log2 n semitones), a second, light finger touches it 1/n of the stopped length further
+(the actions table's ``touch_ratio``): a fourth above for n = 4 (the default, two octaves
+above the stopped note), a fifth for n = 3, a major third for n = 5, as the notes table's
+``harmonic_node`` says (:func:`place_artificial_harmonics`). Its bow and force are those of
+a natural harmonic of the same n (beta refers to the stopped length); no vibrato, intonation
+offset, ornament or portamento; the stopping finger is corrected by ear like a stopped
+note's.
 """
 
 from __future__ import annotations
@@ -138,4 +148,98 @@ def place_natural_harmonics(notes: pd.DataFrame, strings: pd.DataFrame,
     return out
 
 
-__all__ = ["natural_node", "node_semitones", "place_natural_harmonics"]
+#: The artificial harmonic played when the score gives no touching pitch: a fourth above.
+DEFAULT_ARTIFICIAL_NODE = 4
+
+
+def artificial_stop(pitch: float, n: int, open_strings: tuple[float, ...] | np.ndarray, *,
+                    max_semitones: float, string: int | None = None,
+                    ) -> tuple[int, float] | None:
+    """String and stopping finger (semitones above the open string) of an artificial harmonic.
+
+    Parameters
+    ----------
+    pitch : float, MIDI
+        Sounding pitch, the n-th harmonic of the stopped note.
+    n : int
+        Harmonic number (the touching finger at 1/n of the stopped length).
+    open_strings : sequence of float, MIDI
+        The open strings, lowest first.
+    max_semitones : float
+        Highest stopping position (semitones above the open string).
+    string : int, optional
+        The indicated string, taken when the stopped note lies on it.
+
+    Returns
+    -------
+    (string, semitones) or None
+        The indicated string or else the highest string on which the stopped note is at
+        least a semitone above the open string (the lowest position); None when none fits.
+
+    Examples
+    --------
+    >>> violin = (55.0, 62.0, 69.0, 76.0)
+    >>> artificial_stop(93.0, 4, violin, max_semitones=27.0)  # A6: A4 stopped on D
+    (1, 7.0)
+    >>> artificial_stop(93.0, 4, violin, max_semitones=27.0, string=0)
+    (0, 14.0)
+    >>> artificial_stop(70.0, 4, violin, max_semitones=27.0) is None
+    True
+    """
+    stopped = pitch - 12.0 * np.log2(n)
+    fits = [s for s, o in enumerate(open_strings) if 1.0 - PITCH_TOLERANCE
+            <= stopped - o <= max_semitones]
+    if not fits:
+        return None
+    chosen = string if string in fits else max(fits)
+    return chosen, float(stopped - open_strings[chosen])
+
+
+def place_artificial_harmonics(notes: pd.DataFrame, strings: pd.DataFrame,
+                               open_strings: tuple[float, ...], config: dict[str, Any],
+                               warnings: list[str] | None = None) -> pd.DataFrame:
+    """Put the part's artificial harmonics on a string: a stopping and a touching finger.
+
+    Parameters and returns as :func:`place_natural_harmonics`, whose output ``strings`` is
+    (with its ``touch`` and ``node`` columns): an artificial harmonic gets ``semitones`` at
+    the stopped note, ``touch`` False and ``node`` n (the touching finger at 1/n of the
+    stopped length, from ``harmonic_node``, default :data:`DEFAULT_ARTIFICIAL_NODE`). Those in
+    chords or whose stopped note lies on no string are played stopped at their sounding
+    pitch, with a line in ``warnings``.
+    """
+    out = strings.copy()
+    if "harmonic_type" not in notes.columns:
+        return out
+    from data_schemas.instruments import limits
+
+    top = float(-12.0 * np.log2(1.0 - limits().max_finger_ratio))
+    artificial = (notes["harmonic_type"] == "artificial").to_numpy()
+    chord = notes["chord_size"].to_numpy() > 1
+    nodes = (notes["harmonic_node"].to_numpy(dtype=np.float64, na_value=np.nan)
+             if "harmonic_node" in notes.columns else np.full(len(notes), np.nan))
+    indication = notes["string_indication"].to_numpy(dtype=np.float64, na_value=np.nan)
+    missed = []
+    for i in np.flatnonzero(artificial):
+        n = int(nodes[i]) if np.isfinite(nodes[i]) else DEFAULT_ARTIFICIAL_NODE
+        pitch = float(notes["midi_pitch"].iloc[i]) + float(notes["cents"].iloc[i]) / 100.0
+        hint = int(indication[i]) if np.isfinite(indication[i]) else None
+        found = None if chord[i] else artificial_stop(pitch, n, open_strings,
+                                                      max_semitones=top, string=hint)
+        if found is None:
+            missed.append(int(notes["measure"].iloc[i]))
+            continue
+        row = out.index[i]
+        out.loc[row, ["string", "semitones", "touch", "node"]] = [found[0], found[1], False, n]
+    out["string"] = out["string"].astype(np.int8)
+    out["touch"] = out["touch"].astype(bool)
+    out["node"] = out["node"].astype(np.int64)
+    if missed and warnings is not None:
+        warnings.append(f"part {notes['part_name'].iloc[0]!r}: {len(missed)} artificial "
+                        f"harmonic(s) in chords or with their stopped note on no string are "
+                        f"played stopped (m. "
+                        f"{', '.join(str(m) for m in sorted(set(missed)))})")
+    return out
+
+
+__all__ = ["DEFAULT_ARTIFICIAL_NODE", "artificial_stop", "natural_node", "node_semitones",
+           "place_artificial_harmonics", "place_natural_harmonics"]

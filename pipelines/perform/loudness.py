@@ -146,7 +146,7 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     cal = Calibration(table, instrument)
     short = 0
     for e in events:
-        if e.pizz or e.touch:  # calibrated on stopped notes: harmonics keep their marking
+        if e.pizz or e.node:  # calibrated on stopped notes: harmonics keep their marking
             continue
         marked, marked_next = e.dynamic, e.dynamic_next
         e.dynamic, miss = bowed_level(cal, e.strings, e.semitones, target(config, marked),

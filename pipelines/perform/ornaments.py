@@ -159,7 +159,7 @@ def assign_portamenti(events: list, config: dict[str, Any]) -> None:
     orn = config["ornaments"]
     dt = config["frames"]["interval"]
     for prev, e in zip(events, events[1:], strict=False):
-        if e.ornament is not None or e.pizz or prev.pizz or not e.cont or e.touch or prev.touch:
+        if e.ornament is not None or e.pizz or prev.pizz or not e.cont or e.node or prev.node:
             continue
         if len(e.strings) != 1 or len(prev.strings) != 1 or e.strings != prev.strings:
             continue

@@ -28,7 +28,7 @@ from data_schemas.instruments import instrument_facts
 from pipelines.perform.ear import correct_by_ear
 from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.expression import assign_vibrato, intonation_cents
-from pipelines.perform.harmonics import place_natural_harmonics
+from pipelines.perform.harmonics import place_artificial_harmonics, place_natural_harmonics
 from pipelines.perform.instruments import choose_strings, fit_range
 from pipelines.perform.loudness import even_out
 from pipelines.perform.ornaments import assign_ornaments, assign_portamenti, time_graces
@@ -133,7 +133,8 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     touch = (strings["touch"].to_numpy(bool) if "touch" in strings
              else np.zeros(semis.size, bool))
     node = strings["node"].to_numpy() if "node" in strings else np.zeros(semis.size, int)
-    stopped = (semis > 1e-6) & ~touch  # a touching finger has no intonation of its own
+    # a touching finger has no intonation of its own, nor the stopping finger beside it
+    stopped = (semis > 1e-6) & ~touch & (node == 0)
     cents = intonation_cents(notes["midi_pitch"].to_numpy(), onset, stopped, config, skill, rng)
     semis[stopped] = np.maximum(semis[stopped] + cents[stopped] / 100.0, 0.05)
     key = notes["onset_beats"].round(6).astype(str) + notes["grace"].astype(str)
@@ -147,7 +148,8 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
         rows = rows[np.argsort(cols["midi_pitch"][rows], kind="stable")]
         event = _event(rows, cols, st, semis, rolled, onset, end)
         event.touch = bool(touch[rows].all())
-        event.node = int(node[rows[0]]) if event.touch else 0
+        # node: a natural harmonic's (touch) or a lone artificial harmonic's (stopped)
+        event.node = int(node[rows[0]]) if event.touch or rows.size == 1 else 0
         events.append(event)
     events = _merge_ties(events, cols)
     time_graces(events, cols, config)
@@ -163,7 +165,7 @@ def build_events(notes: pd.DataFrame, strings: pd.DataFrame, config: dict[str, A
     assign_ornaments(events, cols, config)
     assign_portamenti(events, config)
     for e in events:  # a touching finger keeps still: no vibrato, ornament or glide
-        if e.touch:
+        if e.touch or e.node:
             e.vibrato = e.ornament = None
     return events
 
@@ -314,7 +316,7 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
     """The front end every method shares: order, fold into range, choose strings, time.
 
     Parameters are those of :func:`perform_part`; ``warnings`` receives what could not be
-    played as written (natural harmonics played stopped).
+    played as written (harmonics played stopped).
 
     Returns
     -------
@@ -323,7 +325,8 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
         The part's notes in playing order, folded into range.
     strings : pandas.DataFrame
         String and finger per note (:func:`pipelines.perform.instruments.choose_strings`,
-        natural harmonics placed by :func:`pipelines.perform.harmonics.place_natural_harmonics`).
+        harmonics placed by :func:`pipelines.perform.harmonics.place_natural_harmonics` and
+        :func:`~pipelines.perform.harmonics.place_artificial_harmonics`).
     events : list of Event
         Played events (:func:`build_events`).
     """
@@ -334,6 +337,7 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
     notes = fit_range(notes.reset_index(drop=True), inst, transpose_octaves=transpose_octaves)
     strings = choose_strings(notes, inst)
     strings = place_natural_harmonics(notes, strings, inst.open_strings, config, warnings)
+    strings = place_artificial_harmonics(notes, strings, inst.open_strings, config, warnings)
     if warp is None:
         warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
     events = build_events(notes, strings, config, warp=warp, skill=skill, rng=rng)

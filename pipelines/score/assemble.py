@@ -134,13 +134,13 @@ def _assemble_part(part: RawPart, tempo: TempoMap, source: str,
     defaults.update({"cents": 0.0, "voice": 1, "chord_size": 1, "chord_index": 0,
                      "string_indication": None, "movement": 1, "ornament": None,
                      "ornament_upper": None, "ornament_lower": None, "grace_type": None,
-                     "harmonic_type": None})
+                     "harmonic_type": None, "harmonic_node": None})
     for name, value in defaults.items():
         if name not in df:
             df[name] = value
         elif isinstance(value, bool):
             df[name] = df[name].fillna(value).astype(bool)
-    for name in ("ornament_upper", "ornament_lower"):
+    for name in ("ornament_upper", "ornament_lower", "harmonic_node"):
         df[name] = pd.array([None if pd.isna(v) else int(v) for v in df[name]], dtype="Int8")
     for name in ("ornament", "grace_type", "harmonic_type"):
         df[name] = [v if isinstance(v, str) else None for v in df[name]]

@@ -365,9 +365,9 @@ def _sounding(pitched: list, flags: dict[str, object], raw: RawPart, state: _Par
     """A harmonic sounds at its sounding pitch: an artificial one is one note, not two.
 
     A natural harmonic notated at its touching pitch (a diamond) names its string (as a
-    string indication, unless the score gives one); an artificial one is reported: it is
-    played stopped at its sounding pitch (a stopping and a touching finger at once are not
-    modelled).
+    string indication, unless the score gives one); an artificial one gives its harmonic
+    number (``harmonic_node``: the touching finger's interval above the stopped note), played
+    with a stopping and a touching finger (:mod:`pipelines.perform.harmonics`).
     """
     from data_schemas.instruments import instrument_facts
     from pipelines.perform.instruments import guess_instrument
@@ -386,7 +386,7 @@ def _sounding(pitched: list, flags: dict[str, object], raw: RawPart, state: _Par
     if kind == "natural":
         flags.setdefault("string_indication", touched_string(written[0], opens))
     else:
-        state.report(raw, "artificial harmonic", "played stopped at its sounding pitch")
+        flags["harmonic_node"] = int(round(2.0 ** ((midi - written[0]) / 12.0)))
     return [(midi, pitched[0][1])]
 
 
