@@ -54,6 +54,39 @@ FORCE_BOW, FORCE_FINGER, ROSIN_HEATING, FORCE_TOUCH = 0, 1, 2, 3
 N_CARRIED = 4
 
 
+@njit(inline="always", fastmath=_FAST, error_model="numpy")
+def bow_contact(dv, normal, contact_now, heating, thermal, mu_s, mu_d, v0_nominal,
+                noise_depth, draw, admittance, inverse_admittance):  # pragma: no cover
+    """Bow force (N), slip speed (m/s) and stick-slip state at one sample of a bowing contact.
+
+    ``dv`` is the bow's velocity minus the string's free velocity at the bow (m/s),
+    ``normal`` the bow force (N), ``draw`` the friction noise's next uniform draw (used
+    only when the string slips: the caller advances its draw index then), ``admittance``
+    the bow point's end-of-step velocity per bow force (s/kg). Shared by every kernel that
+    bows a string (one finger, two fingers); inlined, so each compiles as if written there.
+    """
+    f_stick = dv * inverse_admittance
+    static = mu_s
+    if thermal:
+        static = mu_d + (mu_s - mu_d) * math.exp(-heating)
+    if contact_now == CONTACT_GRIP or abs(f_stick) <= static * normal:
+        return f_stick, 0.0, STICKING
+    d = abs(dv)
+    if thermal:
+        # Rosin friction at the contact's heating: Coulomb, so the slip speed follows
+        # directly.
+        mu = mu_d + (static - mu_d) * (1.0 - noise_depth * draw)
+        slip = d - admittance * normal * mu
+    else:
+        # Hyperbolic friction, solved in closed form for the slip speed.
+        v0 = v0_nominal * (1.0 - noise_depth * draw)
+        b = v0 - d + admittance * normal * mu_d
+        c = -v0 * (d - admittance * normal * mu_s)
+        slip = 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
+        mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
+    return math.copysign(normal * mu, dv), slip, SLIPPING
+
+
 @njit(cache=True, fastmath=_FAST, error_model="numpy")
 def advance_string(modal_state, carried, coefficients, n_bridge, gains, finger_spring,
                    friction, fingered, bow_velocity, bow_force, contact, noise, noise_used,
@@ -159,32 +192,13 @@ def advance_string(modal_state, carried, coefficients, n_bridge, gains, finger_s
             f_bow = 0.0
             out_stick_slip[t] = OFF_STRING
         else:
-            dv = bow_velocity[t] - v_free
-            f_stick = dv * inverse_admittance
-            normal = bow_force[t]
-            static = mu_s
-            if thermal:
-                static = mu_d + (mu_s - mu_d) * math.exp(-heating)
-            if contact_now == CONTACT_GRIP or abs(f_stick) <= static * normal:
-                f_bow = f_stick
-                out_stick_slip[t] = STICKING
-            else:
-                d = abs(dv)
-                if thermal:
-                    # Rosin friction at the contact's heating: Coulomb, so the slip speed
-                    # follows directly.
-                    mu = mu_d + (static - mu_d) * (1.0 - noise_depth * noise[next_noise])
-                    slip = d - admittance * normal * mu
-                else:
-                    # Hyperbolic friction, solved in closed form for the slip speed.
-                    v0 = v0_nominal * (1.0 - noise_depth * noise[next_noise])
-                    b = v0 - d + admittance * normal * mu_d
-                    c = -v0 * (d - admittance * normal * mu_s)
-                    slip = 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
-                    mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
+            f_bow, slip, state = bow_contact(
+                bow_velocity[t] - v_free, bow_force[t], contact_now, heating, thermal, mu_s,
+                mu_d, v0_nominal, noise_depth, noise[next_noise], admittance,
+                inverse_admittance)
+            out_stick_slip[t] = state
+            if state == SLIPPING:
                 next_noise += 1
-                f_bow = math.copysign(normal * mu, dv)
-                out_stick_slip[t] = SLIPPING
         f_finger = p + q * f_bow
         heating = heating * cooling + abs(f_bow) * slip * heating_per_joule
         out_bridge[t] = bridge + br_b * f_bow + br_f * f_finger

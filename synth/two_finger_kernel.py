@@ -11,12 +11,9 @@ The slow numpy twin used to check it is ``tests/naive_modal.py`` (``touch_ratio`
 
 from __future__ import annotations
 
-import math
-
 from numba import njit
 
 from synth.modal_kernel import (
-    CONTACT_GRIP,
     CONTACT_LIFTED,
     FORCE_BOW,
     FORCE_FINGER,
@@ -43,8 +40,8 @@ from synth.modal_kernel import (
     SLIPPING,
     STATE_A,
     STATE_W,
-    STICKING,
     THERMAL,
+    bow_contact,
 )
 
 _FAST = {"reassoc", "contract", "nsz", "arcp"}
@@ -151,29 +148,13 @@ def advance_two_fingers(modal_state, carried, coefficients, touch_rows, n_bridge
             f_bow = 0.0
             out_stick_slip[t] = OFF_STRING
         else:
-            dv = bow_velocity[t] - v_free
-            f_stick = dv * inverse_admittance
-            normal = bow_force[t]
-            static = mu_s
-            if thermal:
-                static = mu_d + (mu_s - mu_d) * math.exp(-heating)
-            if contact_now == CONTACT_GRIP or abs(f_stick) <= static * normal:
-                f_bow = f_stick
-                out_stick_slip[t] = STICKING
-            else:
-                d = abs(dv)
-                if thermal:
-                    mu = mu_d + (static - mu_d) * (1.0 - noise_depth * noise[next_noise])
-                    slip = d - admittance * normal * mu
-                else:
-                    v0 = v0_nominal * (1.0 - noise_depth * noise[next_noise])
-                    b = v0 - d + admittance * normal * mu_d
-                    c = -v0 * (d - admittance * normal * mu_s)
-                    slip = 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
-                    mu = mu_d + (mu_s - mu_d) * v0 / (v0 + slip)
+            f_bow, slip, state = bow_contact(
+                bow_velocity[t] - v_free, bow_force[t], contact_now, heating, thermal, mu_s,
+                mu_d, v0_nominal, noise_depth, noise[next_noise], admittance,
+                inverse_admittance)
+            out_stick_slip[t] = state
+            if state == SLIPPING:
                 next_noise += 1
-                f_bow = math.copysign(normal * mu, dv)
-                out_stick_slip[t] = SLIPPING
         f_1 = p_1 + q1 * f_bow
         f_2 = p_2 + q2 * f_bow
         heating = heating * cooling + abs(f_bow) * slip * heating_per_joule
