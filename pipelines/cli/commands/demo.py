@@ -94,7 +94,9 @@ def scales(out: Path, seed: int) -> list[str]:
 
     pieces = []
     lines = ["## The instrument", "", "Pentachord (0, 2, 4, 5, 7 semitones) on every string, "
-             "detache, beta 0.1, 0.3 m/s, each string's reference force. "
+             "detache, beta 0.1, 0.3 m/s, each string's reference force; notes last at least "
+             "60 periods of the lowest open string, pitch measured over their settled part "
+             "(from 45 % of the note to 0.1 s before its end). "
              "Audio: `scales.wav`; bowing: `scales_<instrument>.png`.", "",
              "| instrument | note | pitch error (cents) |", "|---|---|---|"]
     for name in INSTRUMENT_NAMES:
@@ -263,16 +265,16 @@ def heldout_story(out: Path, workers: int) -> list[str]:
 
 
 def _pitch_rows(name: str, audio: np.ndarray, events) -> list[str]:
-    """Measure each note's pitch (YIN over its middle) against the equal-tempered target."""
+    """Each note's pitch (YIN over its settled part) against the equal-tempered target."""
     import numpy as np
     from music21.pitch import Pitch
 
     from synth.playability import yin_pitch
 
     rows = []
-    for t0, label in zip(events["t0"], events["label"], strict=True):
-        a = int((t0 + 0.15) * SAMPLE_RATE)
-        b = int((t0 + 0.35) * SAMPLE_RATE)
+    for t0, t1, label in zip(events["measure_start"], events["measure_end"], events["label"],
+                             strict=True):
+        a, b = int(t0 * SAMPLE_RATE), int(t1 * SAMPLE_RATE)
         target = Pitch(label).frequency
         f0 = yin_pitch(audio[a:b], SAMPLE_RATE, target)
         cents = 1200 * np.log2(f0 / target)
