@@ -57,17 +57,19 @@ def constants(name: str, strings: str | None):
 
 def existence(cell: tuple) -> dict:
     """Ramped F_min and F_max of one (instrument, string, v, beta, strings) cell."""
+    from data_schemas.actions import ACTIONS
     from synth.bow_starts import ramped_limit
 
     name, s, v, beta, strings = cell
     inst = constants(name, strings)
+    top = float(ACTIONS.column("bow_force").maximum)  # the controls' largest force, N
     middle = float((machine_f_min(beta) * machine_f_max(v, beta)) ** 0.5)
     for k in START_FACTORS:
         for a in START_ACCELERATIONS:
             kw = dict(bow_velocity=v, beta=beta, start_force=middle * k, acceleration=a)
             low = ramped_limit(inst, s, end_force=middle * k * DOWN, **kw)
             if low is not None:
-                high = ramped_limit(inst, s, end_force=middle * k * UP, **kw)
+                high = ramped_limit(inst, s, end_force=min(middle * k * UP, top), **kw)
                 return {"instrument": name, "string": s, "bow_velocity": v, "beta": beta,
                         "start_force": middle * k, "start_acceleration": a,
                         "f_min": low, "f_max": high}
