@@ -34,7 +34,9 @@ class Stroke:
     """One bow stroke: event indices, direction (+1 down, -1 up), and its planned shape.
 
     ``t`` (s), ``speed`` (m/s, unsigned) and ``position`` (0 frog .. 1 tip) are arrays of the
-    same shape; ``force_scale`` scales the force with the planned speed change.
+    same shape; ``force_scale`` scales the force with the planned speed change;
+    ``acceleration`` (m/s^2) is the largest change of speed the stroke allows
+    (:func:`stroke_acceleration`).
     """
 
     events: list[int]
@@ -43,6 +45,7 @@ class Stroke:
     speed: np.ndarray
     position: np.ndarray
     travel: float
+    acceleration: float
     force_scale: float = 1.0
     speed_scale: float = 1.0
 
@@ -85,6 +88,45 @@ def limit_acceleration(t: np.ndarray, speed: np.ndarray, max_acceleration: float
         if v[k] > cap:
             v[k] = cap
     return np.asarray(v)
+
+
+#: A short stroke reaches its speed within this share of its length (when
+#: ``bow.short_stroke_acceleration`` allows).
+SHORT_STROKE_RAMP = 0.25
+
+
+def stroke_acceleration(t: np.ndarray, target: np.ndarray, bow: dict[str, Any]) -> float:
+    """The bow acceleration a stroke is played with, m/s^2.
+
+    ``bow.max_acceleration``, unless the stroke is too short to reach its largest target
+    speed within :data:`SHORT_STROKE_RAMP` of its length at that rate: then the rate that
+    does, up to ``bow.short_stroke_acceleration``.
+
+    Parameters
+    ----------
+    t : np.ndarray [shape=(n,)], s
+        The stroke's times.
+    target : np.ndarray [shape=(n,)], m/s
+        Its target speeds.
+    bow : dict
+        The ``[bow]`` settings.
+
+    Examples
+    --------
+    >>> bow = {"max_acceleration": 5.0, "short_stroke_acceleration": 20.0}
+    >>> stroke_acceleration(np.array([0.0, 1.0]), np.array([0.3, 0.3]), bow)
+    5.0
+    >>> round(stroke_acceleration(np.array([0.0, 0.12]), np.array([0.3, 0.3]), bow), 6)
+    10.0
+    >>> stroke_acceleration(np.array([0.0, 0.03]), np.array([0.3, 0.3]), bow)
+    20.0
+    """
+    base = float(bow["max_acceleration"])
+    length = float(t[-1] - t[0]) if t.size > 1 else 0.0
+    if length <= 0.0 or not target.size:
+        return base
+    needed = float(np.max(target)) / (SHORT_STROKE_RAMP * length)
+    return float(min(max(base, needed), max(base, bow.get("short_stroke_acceleration", base))))
 
 
 def _dynamic_at(e: Event, t: np.ndarray) -> np.ndarray:
@@ -142,11 +184,12 @@ def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
     strokes = []
     for idx in _stroke_groups(events):
         t = _stroke_grid(events, idx, dt)
-        speed = limit_acceleration(t, _target_speed(events, idx, t, config),
-                                   bow["max_acceleration"])
+        target = _target_speed(events, idx, t, config)
+        accel = stroke_acceleration(t, target, bow)
+        speed = limit_acceleration(t, target, accel)
         travel = float(budget.travel(np.trapezoid(speed, t)))
         strokes.append(Stroke(idx, events[idx[0]].direction, t, speed, np.zeros_like(t),
-                              travel))
+                              travel, accel))
     squeezed = _place_strokes(strokes, events, config, budget)
     if squeezed and warnings is not None:
         warnings.append(f"{squeezed} strokes were slowed below "
@@ -196,7 +239,7 @@ def _place_strokes(strokes: list[Stroke], events: list[Event], config: dict[str,
         if s.travel * scale > avail:
             scale = max(avail, 0.0) / s.travel
         if scale != 1.0:
-            s.speed = limit_acceleration(s.t, s.speed * scale, bow["max_acceleration"])
+            s.speed = limit_acceleration(s.t, s.speed * scale, s.acceleration)
             s.speed_scale = scale
             s.force_scale = float(np.sqrt(np.clip(scale, 0.1, 2.0)))
             if scale < bow["min_speed_scale"]:
