@@ -125,8 +125,11 @@ def test_evaluate_a_recording_from_its_alignment_without_actions(tmp_path, capsy
     out = json.loads(capsys.readouterr().out)
     assert out["measured_from"] == "audio-only estimates" and out["piece"]["notes"] == 3
     assert out["piece"]["helmholtz_share"] == pytest.approx(1.0)
-    # tones start exactly at their aligned times: attacks of a few periods' resolution
-    assert all(0 <= n["attack_ms"] < 5 for n in out["notes"])
+    # tones are periodic from their aligned starts: the attack ends there (from the onset
+    # refined from the audio) to within two periods' resolution
+    for n, (start, _, _) in zip(out["notes"], ROWS, strict=True):
+        assert n["attack_ms"] >= 0
+        assert abs(n["attack_from"] + n["attack_ms"] / 1000 - start) < 0.003
 
 
 def test_evaluate_from_the_score_alone(tmp_path, capsys):
