@@ -28,6 +28,12 @@ from pipelines.perform.events import Event
 
 TABLE_PATH = Path(__file__).with_name("loudness_calibration.parquet")
 LEVELS = np.arange(10, dtype=np.float64)
+#: semitones: the calibration's mf notes flat and sharp of each stopped position.
+PITCH_OFFSET = 0.1
+#: dB: a pitch offset's measured effect beyond this is a failed note, not a resonance.
+PITCH_LIMIT = 4.0
+#: dB: a calibration note this far from the median of it and its level neighbours failed.
+OUTLIER_DB = 2.0
 _SOURCES = (Path(__file__).resolve().parents[2] / "synth" / "config" / "strings.toml",
             Path(__file__).resolve().parents[2] / "data_schemas" / "config" / "instruments.toml")
 
@@ -62,14 +68,60 @@ def load_calibration(path: str | Path | None = None) -> pd.DataFrame:
     return _read(str(path or TABLE_PATH))
 
 
+def robust_surface(loud: np.ndarray, *, iterations: int = 4) -> np.ndarray:
+    """A string's loudness surface with isolated failed notes replaced.
+
+    Parameters
+    ----------
+    loud : np.ndarray [shape=(positions, levels)], LUFS
+        Measured loudness of one string at every calibrated finger position and lane level.
+    iterations : int
+        Rounds of Tukey's median polish.
+
+    Returns
+    -------
+    np.ndarray [shape=(positions, levels)], LUFS
+        ``position + level + residual``: the median polish's additive fit (a position's
+        loudness at mf, the string's level curve) plus each position's own deviation from
+        it. A deviation more than :data:`OUTLIER_DB` from the median of it and its two
+        level neighbours (at the lanes' ends: its neighbour and the line through the next
+        two) is a steady calibration note that fell out of Helmholtz motion; it is replaced
+        by its neighbours' mean (at an end, the line), while a position's own curve -- a
+        resonance that grows or shrinks with the bow's spectrum -- is kept as measured.
+
+    Examples
+    --------
+    >>> truth = np.add.outer([-20.0, -30.0], np.arange(5.0) * 3.0)
+    >>> measured = truth.copy(); measured[0, 2] -= 9.0     # one note failed
+    >>> bool(np.allclose(robust_surface(measured), truth))
+    True
+    """
+    loud = np.asarray(loud, dtype=np.float64)
+    resid = loud - np.median(loud)
+    for _ in range(iterations):  # what is left after the positions' and levels' medians
+        resid -= np.median(resid, axis=1)[:, None]
+        resid -= np.median(resid, axis=0)[None, :]
+    fit = loud - resid
+    if loud.shape[1] >= 3:
+        # each level's neighbours; at an end, the neighbour and the line through the next two
+        left = np.column_stack([2 * resid[:, 1] - resid[:, 2], resid[:, :-1]])
+        right = np.column_stack([resid[:, 1:], 2 * resid[:, -2] - resid[:, -3]])
+        failed = np.abs(resid - np.median(np.stack([left, resid, right]), axis=0)) > OUTLIER_DB
+        resid = np.where(failed, 0.5 * (left + right), resid)
+    return fit + resid
+
+
 class Calibration:
     """Calibrated loudness of one instrument at any string, finger position and level.
 
-    ``loudness(string, semitone, level)`` is the steady loudness (LUFS) measured at mf on
-    that string and position plus the string's measured level curve (loudness at each level
-    re mf, the median over the measured positions). Positions are taken at the nearest
-    calibrated semitone: the body's resonances are narrower than a semitone, so a note's
-    intonation offset or vibrato does not move it between calibrated neighbours.
+    ``loudness(string, semitone, level)`` is the steady loudness (LUFS) measured on that
+    string at the nearest calibrated position at every lane level (:func:`robust_surface`:
+    a failed calibration note replaced by its neighbours' trend), interpolated linearly
+    between levels, plus how much louder or softer the position sounds when the finger is
+    off it by the note's intonation: measured at mf :data:`PITCH_OFFSET` semitones flat and
+    sharp and interpolated (a body resonance is sharp enough that 10 cents move a note's
+    loudness by a dB or two; an effect beyond :data:`PITCH_LIMIT` dB is taken for a failed
+    note and ignored).
     """
 
     def __init__(self, table: pd.DataFrame, instrument: str):
@@ -78,21 +130,42 @@ class Calibration:
         rows = table[table["instrument"] == instrument]
         if rows.empty:
             raise ParameterError(f"no loudness calibration for instrument {instrument!r}")
-        self.mf: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self.curve: dict[int, np.ndarray] = {}
+        self.grid: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self.pitch: dict[int, np.ndarray] = {}
         for s, g in rows.groupby("string"):
-            at_mf = g[g["level"] == 5.0].sort_values("semitone")
-            self.mf[int(s)] = (at_mf["semitone"].to_numpy(), at_mf["loudness"].to_numpy())
-            levels = g[g["semitone"].isin(g.loc[g["level"] != 5.0, "semitone"])]
-            wide = levels.pivot_table(index="semitone", columns="level", values="loudness")
-            rel = wide.sub(wide[5.0], axis=0).median(axis=0)  # robust to a note that fails
-            self.curve[int(s)] = np.interp(LEVELS, rel.index.to_numpy(), rel.to_numpy())
+            whole = g["semitone"] % 1.0 == 0.0
+            wide = g[whole].pivot_table(index="semitone", columns="level", values="loudness")
+            if wide.isna().any().any() or wide.shape[1] != LEVELS.size:
+                raise ParameterError(f"the loudness calibration of {instrument} string {s} "
+                                     "does not hold every position at every level (run "
+                                     "bench/calibrate_loudness.py)")
+            positions = wide.index.to_numpy(np.float64)
+            self.grid[int(s)] = (positions, wide.columns.to_numpy(np.float64),
+                                 robust_surface(wide.to_numpy()))
+            self.pitch[int(s)] = self._pitch_effect(g[~whole & (g["level"] == 5.0)],
+                                                    positions, wide[5.0].to_numpy())
+
+    @staticmethod
+    def _pitch_effect(off: pd.DataFrame, positions: np.ndarray,
+                      at_mf: np.ndarray) -> np.ndarray:
+        """Loudness re the position at mf (dB): flat / on / sharp, shape (positions, 3)."""
+        effect = np.zeros((positions.size, 3))
+        for q, loud in zip(off["semitone"].to_numpy(), off["loudness"].to_numpy(),
+                           strict=True):
+            i = int(np.argmin(np.abs(positions - q)))
+            if abs(abs(q - positions[i]) - PITCH_OFFSET) > 1e-6:
+                continue
+            d = loud - at_mf[i]
+            effect[i, 0 if q < positions[i] else 2] = d if abs(d) <= PITCH_LIMIT else 0.0
+        return effect
 
     def loudness(self, string: int, semitone: float, level: np.ndarray) -> np.ndarray:
         """Calibrated loudness (LUFS) of ``string`` at ``semitone`` and dynamic ``level``."""
-        xs, ys = self.mf[string]
-        base = float(np.interp(np.round(semitone), xs, ys))
-        return base + np.interp(np.asarray(level, np.float64), LEVELS, self.curve[string])
+        positions, levels, surface = self.grid[string]
+        i = int(np.argmin(np.abs(positions - np.round(semitone))))
+        shift = float(np.interp(semitone - positions[i], [-PITCH_OFFSET, 0.0, PITCH_OFFSET],
+                                self.pitch[string][i]))
+        return np.interp(np.asarray(level, np.float64), levels, surface[i]) + shift
 
 
 def target(config: dict[str, Any], level: float) -> float:
@@ -105,14 +178,20 @@ def bowed_level(cal: Calibration, strings: list[int], semitones: list[float],
                 goal: float, max_shift: float, marked: float) -> tuple[float, bool]:
     """The lane level whose calibrated loudness on these strings is ``goal`` LUFS.
 
-    Returns the level and whether it fell short (lanes' end or ``max_shift``).
+    Returns the level and whether it fell short (lanes' end or ``max_shift``). Where the
+    calibrated curve crosses the goal more than once (a curve that is not monotonic), the
+    crossing nearest the marked level wins; where it does not cross, the nearest level.
     """
-    grid = np.linspace(max(0.0, marked - max_shift), min(9.0, marked + max_shift), 121)
+    grid = np.linspace(max(0.0, marked - max_shift), min(9.0, marked + max_shift), 241)
     power = np.mean([10.0 ** (cal.loudness(s, q, grid) / 10.0)
                      for s, q in zip(strings, semitones, strict=True)], axis=0)
-    level_db = 10.0 * np.log10(power)
-    best = int(np.argmin(np.abs(level_db - goal)))
-    return float(grid[best]), bool(abs(level_db[best] - goal) > 0.5)
+    diff = 10.0 * np.log10(power) - goal
+    k = np.flatnonzero(np.sign(diff[:-1]) != np.sign(diff[1:]))
+    if k.size:  # linear interpolation inside each bracketing step
+        levels = grid[k] + (grid[k + 1] - grid[k]) * diff[k] / (diff[k] - diff[k + 1])
+        return float(levels[np.argmin(np.abs(levels - marked))]), False
+    best = int(np.argmin(np.abs(diff)))
+    return float(grid[best]), bool(abs(diff[best]) > 0.5)
 
 
 def even_out(events: list[Event], instrument: str, config: dict[str, Any],
