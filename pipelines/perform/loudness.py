@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from pipelines.perform.config import QUIET_DB
 from pipelines.perform.events import Event
 
 TABLE_PATH = Path(__file__).with_name("loudness_calibration.parquet")
@@ -117,7 +118,8 @@ class Calibration:
     ``loudness(string, semitone, level)`` is the steady loudness (LUFS) measured on that
     string at the nearest calibrated position at every lane level (:func:`robust_surface`:
     a failed calibration note replaced by its neighbours' trend), interpolated linearly
-    between levels, plus how much louder or softer the position sounds when the finger is
+    between levels (below pppp: :data:`pipelines.perform.config.QUIET_DB` dB a level, the
+    lanes' extension), plus how much louder or softer the position sounds when the finger is
     off it by the note's intonation: measured at mf :data:`PITCH_OFFSET` semitones flat and
     sharp and interpolated (a body resonance is sharp enough that 10 cents move a note's
     loudness by a dB or two; an effect beyond :data:`PITCH_LIMIT` dB is taken for a failed
@@ -165,7 +167,9 @@ class Calibration:
         i = int(np.argmin(np.abs(positions - np.round(semitone))))
         shift = float(np.interp(semitone - positions[i], [-PITCH_OFFSET, 0.0, PITCH_OFFSET],
                                 self.pitch[string][i]))
-        return np.interp(np.asarray(level, np.float64), levels, surface[i]) + shift
+        level = np.asarray(level, np.float64)
+        quiet = QUIET_DB * np.minimum(level, 0.0)  # below pppp (config.dynamic_table)
+        return np.interp(level, levels, surface[i]) + shift + quiet
 
 
 def target(config: dict[str, Any], level: float) -> float:
@@ -175,14 +179,16 @@ def target(config: dict[str, Any], level: float) -> float:
 
 
 def bowed_level(cal: Calibration, strings: list[int], semitones: list[float],
-                goal: float, max_shift: float, marked: float) -> tuple[float, bool]:
+                goal: float, max_shift: float, marked: float,
+                below: float = 0.0) -> tuple[float, bool]:
     """The lane level whose calibrated loudness on these strings is ``goal`` LUFS.
 
-    Returns the level and whether it fell short (lanes' end or ``max_shift``). Where the
+    Levels run from ``-below`` (softer than pppp) to 9, at most ``max_shift`` from
+    ``marked``. Returns the level and whether it fell short (lanes' end or ``max_shift``). Where the
     calibrated curve crosses the goal more than once (a curve that is not monotonic), the
     crossing nearest the marked level wins; where it does not cross, the nearest level.
     """
-    grid = np.linspace(max(0.0, marked - max_shift), min(9.0, marked + max_shift), 241)
+    grid = np.linspace(max(-below, marked - max_shift), min(9.0, marked + max_shift), 241)
     power = np.mean([10.0 ** (cal.loudness(s, q, grid) / 10.0)
                      for s, q in zip(strings, semitones, strict=True)], axis=0)
     diff = 10.0 * np.log10(power) - goal
@@ -229,11 +235,11 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
             continue
         marked, marked_next = e.dynamic, e.dynamic_next
         e.dynamic, miss = bowed_level(cal, e.strings, e.semitones, target(config, marked),
-                                      cfg["max_shift"], marked)
+                                      cfg["max_shift"], marked, cfg["below_pppp"])
         if marked_next is not None:
             e.dynamic_next, miss_next = bowed_level(
                 cal, e.strings, e.semitones, target(config, marked_next), cfg["max_shift"],
-                marked_next)
+                marked_next, cfg["below_pppp"])
             miss = miss or miss_next
         short += miss
     if short and warnings is not None:
