@@ -92,7 +92,7 @@ def robust_surface(loud: np.ndarray, *, iterations: int = 4) -> np.ndarray:
 
     Examples
     --------
-    >>> truth = np.add.outer([-20.0, -30.0], np.arange(5.0) * 3.0)
+    >>> truth = np.add.outer([-20.0, -30.0, -26.0], np.arange(5.0) * 3.0)
     >>> measured = truth.copy(); measured[0, 2] -= 9.0     # one note failed
     >>> bool(np.allclose(robust_surface(measured), truth))
     True
