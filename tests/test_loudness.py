@@ -69,7 +69,7 @@ def test_calibration_table_is_complete_and_current():
         "string physics or lanes changed: run bench/calibrate_loudness.py"
     whole = table[table["semitone"] % 1.0 == 0.0]
     assert whole.groupby(["instrument", "string"]).size().to_dict() == {
-        (i, s): 28 * 10 for i in ("cello", "viola", "violin") for s in range(4)}
+        (i, s): 28 * 10 * 2 for i in ("cello", "viola", "violin") for s in range(4)}  # both bows
     off = table[table["semitone"] % 1.0 != 0.0]
     assert set(off["level"]) == {5.0}
     assert off.groupby(["instrument", "string"]).size().to_dict() == {
@@ -231,3 +231,22 @@ def test_bowed_level_finds_the_crossing_nearest_the_marking():
     # out of the lanes' reach within max_shift: as near as it may go, counted
     level, short = bowed_level(cal, [0], [1.0], -45.0, 2.0, 5.0)
     assert (level, short) == (pytest.approx(3.0), True)
+
+
+def test_bowed_level_avoids_a_level_the_note_speaks_one_way_only():
+    from pipelines.perform.loudness import bowed_level
+
+    loud = np.vstack([-40.0 + 3.0 * np.arange(10.0)] * 3)
+    table = _table(loud)
+    rows = table[(table["semitone"] == 0.0)].copy()
+    rows.loc[rows["level"] == 4.0, "loudness"] = -34.0  # the up-bow failed at level 4
+    table = pd.concat([table, rows], ignore_index=True)   # each cell both ways
+    cal = Calibration(table, "violin")
+    assert cal.speaks(0, 0.0, np.array([2.9, 3.5, 4.0, 4.9, 5.1])).tolist() == [
+        True, False, False, False, True]
+    assert cal.speaks(0, 1.0, np.array([4.0])).tolist() == [True]
+    # -27.5 LUFS is crossed at 4.17, inside the fragile level: the nearest level that
+    # speaks both ways (just above 5, 2.5 dB loud) instead, and counted
+    level, short = bowed_level(cal, [0], [0.0], -27.5, 6.0, 5.0)
+    assert 5.0 <= level < 5.05 and short
+    assert bowed_level(cal, [0], [1.0], -27.5, 6.0, 5.0) == (pytest.approx(4.0 + 1 / 6), False)

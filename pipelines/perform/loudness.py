@@ -3,15 +3,19 @@
 A player evens out the body's resonances and the strings' differences by bowing, not with a
 fader. The instrument model's loudness at the rules' bow lanes (beta, velocity, force per
 dynamic level, ``data_schemas/config/instruments.toml``) is measured once per instrument,
-string, finger position and level (``bench/calibrate_loudness.py`` writes
-``loudness_calibration.parquet`` beside this module). :func:`even_out` then moves each bowed
-event along the bow lanes -- faster and harder and nearer the bridge where the note sounds
-weak, slower, lighter and further from it where it booms -- to the level whose calibrated
-loudness is the dynamic's target: ``[loudness] mf`` LUFS plus ``[loudness] level_db`` of the
-marked level. The lanes stay in each string's playable window (force in multiples of the
-string's reference force), so the correction never leaves it; where the lanes end (pppp,
-ffff) or ``max_shift`` levels do not reach the target, the event is played as near as
-possible and counted in a warning.
+string, finger position and level, both bow directions, and at mf 10 cents flat and sharp
+(``bench/calibrate_loudness.py`` writes ``loudness_calibration.parquet`` beside this
+module). :func:`even_out` then moves each bowed event along the bow lanes -- faster and
+harder and nearer the bridge where the note sounds weak, slower, lighter and further from it
+where it booms -- to the level whose calibrated loudness (at the note's own position, level
+and intonation, :class:`Calibration`) is the dynamic's target: ``[loudness] mf`` LUFS plus
+``[loudness] level_db`` of the marked level, avoiding levels where the note spoke one bow
+direction only. The lanes stay in each string's playable window (force in multiples of the
+string's reference force), and so does their extension below pppp (``below_pppp`` levels:
+pppp's beta, velocity and force scaled down together,
+:func:`pipelines.perform.config.dynamic_table`); where the lanes end or ``max_shift``
+levels do not reach the target, the event is played as near as possible and counted in a
+warning.
 """
 
 from __future__ import annotations
@@ -134,18 +138,24 @@ class Calibration:
             raise ParameterError(f"no loudness calibration for instrument {instrument!r}")
         self.grid: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.pitch: dict[int, np.ndarray] = {}
+        self.fragile: dict[int, np.ndarray] = {}
         for s, g in rows.groupby("string"):
             whole = g["semitone"] % 1.0 == 0.0
-            wide = g[whole].pivot_table(index="semitone", columns="level", values="loudness")
-            if wide.isna().any().any() or wide.shape[1] != LEVELS.size:
+            cells = g[whole].groupby(["semitone", "level"])["loudness"]
+            mean, top = cells.mean().unstack(), cells.max().unstack()
+            if mean.isna().any().any() or mean.shape[1] != LEVELS.size:
                 raise ParameterError(f"the loudness calibration of {instrument} string {s} "
                                      "does not hold every position at every level (run "
                                      "bench/calibrate_loudness.py)")
-            positions = wide.index.to_numpy(np.float64)
-            self.grid[int(s)] = (positions, wide.columns.to_numpy(np.float64),
-                                 robust_surface(wide.to_numpy()))
+            # the two bows disagree: the note speaks one way only; the one that spoke counts
+            fragile = (top - cells.min().unstack()).to_numpy() > OUTLIER_DB
+            loud = np.where(fragile, top.to_numpy(), mean.to_numpy())
+            positions = mean.index.to_numpy(np.float64)
+            self.grid[int(s)] = (positions, mean.columns.to_numpy(np.float64),
+                                 robust_surface(loud))
+            self.fragile[int(s)] = fragile
             self.pitch[int(s)] = self._pitch_effect(g[~whole & (g["level"] == 5.0)],
-                                                    positions, wide[5.0].to_numpy())
+                                                    positions, loud[:, 5])
 
     @staticmethod
     def _pitch_effect(off: pd.DataFrame, positions: np.ndarray,
@@ -171,6 +181,19 @@ class Calibration:
         quiet = QUIET_DB * np.minimum(level, 0.0)  # below pppp (config.dynamic_table)
         return np.interp(level, levels, surface[i]) + shift + quiet
 
+    def speaks(self, string: int, semitone: float, level: np.ndarray) -> np.ndarray:
+        """Whether the calibration's note spoke both ways at the levels around ``level``.
+
+        False within a level of a fragile calibrated level. Below pppp (not calibrated both
+        ways) a note counts as speaking: the scaled lane keeps pppp's place in the window.
+        """
+        positions, levels, _ = self.grid[string]
+        bad = levels[self.fragile[string][int(np.argmin(np.abs(positions -
+                                                                 np.round(semitone))))]]
+        level = np.asarray(level, np.float64)
+        near = np.any(np.abs(level[:, None] - bad[None, :]) < 1.0, axis=1)
+        return ~near | (level < 0.0)
+
 
 def target(config: dict[str, Any], level: float) -> float:
     """The loudness (LUFS) a dynamic level should sound at (``[loudness]`` settings)."""
@@ -184,19 +207,26 @@ def bowed_level(cal: Calibration, strings: list[int], semitones: list[float],
     """The lane level whose calibrated loudness on these strings is ``goal`` LUFS.
 
     Levels run from ``-below`` (softer than pppp) to 9, at most ``max_shift`` from
-    ``marked``. Returns the level and whether it fell short (lanes' end or ``max_shift``). Where the
-    calibrated curve crosses the goal more than once (a curve that is not monotonic), the
+    ``marked``. Returns the level and whether it fell short (lanes' end or ``max_shift``).
+    Where the calibrated curve crosses the goal more than once (a curve that is not monotonic), the
     crossing nearest the marked level wins; where it does not cross, the nearest level.
+    Levels within one of a level where the calibration's note spoke one bow direction only
+    (:meth:`Calibration.speaks`) are avoided, as a player avoids a bowing that does not
+    speak.
     """
     grid = np.linspace(max(-below, marked - max_shift), min(9.0, marked + max_shift), 241)
     power = np.mean([10.0 ** (cal.loudness(s, q, grid) / 10.0)
                      for s, q in zip(strings, semitones, strict=True)], axis=0)
     diff = 10.0 * np.log10(power) - goal
-    k = np.flatnonzero(np.sign(diff[:-1]) != np.sign(diff[1:]))
+    ok = np.all([cal.speaks(s, q, grid) for s, q in zip(strings, semitones, strict=True)],
+                axis=0)
+    if not ok.any():  # fragile everywhere in reach: take the loudness alone
+        ok[:] = True
+    k = np.flatnonzero((np.sign(diff[:-1]) != np.sign(diff[1:])) & ok[:-1] & ok[1:])
     if k.size:  # linear interpolation inside each bracketing step
         levels = grid[k] + (grid[k + 1] - grid[k]) * diff[k] / (diff[k] - diff[k + 1])
         return float(levels[np.argmin(np.abs(levels - marked))]), False
-    best = int(np.argmin(np.abs(diff)))
+    best = int(np.flatnonzero(ok)[np.argmin(np.abs(diff[ok]))])
     return float(grid[best]), bool(abs(diff[best]) > 0.5)
 
 
@@ -212,7 +242,7 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     instrument : str
     config : dict
         Rules configuration (``[loudness]``: ``enabled``, ``mf``, ``level_db``,
-        ``max_shift``).
+        ``max_shift``, ``below_pppp``).
     warnings : list of str, optional
         Receives a note when some events could not reach their target loudness.
 
