@@ -1,8 +1,9 @@
 """Measure the instrument model's loudness at the rules' bow lanes (the rules' calibration).
 
 Every instrument plays steady detached notes with the modal engine (seed 0, 44.1 kHz, the
-synthesized body): at mf on every string and finger position 0..27 semitones, and at every
-level pppp..ffff on positions 0, 5, 12 and 19 of every string (the level curve). Each note is
+synthesized body): on every string and finger position 0..27 semitones at every level
+pppp..ffff, once down-bow and once up-bow, and at mf every stopped position also 10 cents
+flat and sharp. Each note is
 bowed for 0.6 s at the lane's beta, velocity and force (force in multiples of the string's
 reference force, as the rules play), stopped notes with the rules' mf vibrato (a sine of
 ``[vibrato] extent`` cents at ``rate``: a resonance narrower than the vibrato is heard as the
@@ -12,7 +13,7 @@ to its end (``pipelines.reports.loudness``). The table goes to
 the string physics, instrument facts and lanes it was measured with.
 
 ``--json`` prints one JSON object on stdout (spread of the mf loudness per instrument);
-progress goes to stderr. About 2-4 minutes on one core.
+progress goes to stderr. About 4-5 minutes on one core.
 """
 
 from __future__ import annotations
@@ -35,19 +36,29 @@ from pipelines.perform.calibration_notes import (  # noqa: E402
     steady_actions,
 )
 from pipelines.perform.config import load_config  # noqa: E402
-from pipelines.perform.loudness import TABLE_PATH, calibration_key  # noqa: E402
+from pipelines.perform.loudness import (  # noqa: E402
+    PITCH_OFFSET,
+    TABLE_PATH,
+    calibration_key,
+)
 
 SAMPLE_RATE = 44100
 SKIP = 0.2  # s of attack left out
-CURVE_SEMITONES = (0.0, 5.0, 12.0, 19.0)
 INSTRUMENTS = ("violin", "viola", "cello")
 
 
 def grid() -> pd.DataFrame:
-    """(string, semitone, level) of every calibration note of one instrument."""
-    rows = [(s, q, 5.0) for s in range(4) for q in SEMITONES]
-    rows += [(s, q, float(lv)) for s in range(4) for q in CURVE_SEMITONES
-             for lv in range(10) if lv != 5]
+    """(string, semitone, level) of every calibration note of one instrument.
+
+    Every position at every level twice, down-bow then up-bow (a note that speaks one way
+    and not the other is fragile there), and at mf every stopped position also
+    ``PITCH_OFFSET`` semitones flat and sharp (how the body's resonances answer a note's
+    intonation).
+    """
+    rows = [(s, q, float(lv)) for s in range(4) for q in SEMITONES for lv in range(10)
+            for _ in range(2)]
+    rows += [(s, q + d, 5.0) for s in range(4) for q in SEMITONES[1:]
+             for d in (-PITCH_OFFSET, PITCH_OFFSET)]
     return pd.DataFrame(rows, columns=["string", "semitone", "level"])
 
 
@@ -56,12 +67,16 @@ def measure(instrument: str, config: dict) -> pd.DataFrame:
     from pipelines.reports.loudness import note_loudness
     from synth import render_actions
 
-    notes = grid()
-    audio = render_actions(steady_actions(instrument, notes, config), instrument=instrument,
-                           sample_rate=SAMPLE_RATE, seed=0)
-    starts = note_starts(len(notes))
-    notes["loudness"] = note_loudness(audio, SAMPLE_RATE, starts + SKIP, starts + NOTE,
-                                      skip=0.0)
+    parts = []
+    for _, notes in grid().groupby("string", sort=True):  # one render a string (length limit)
+        notes = notes.reset_index(drop=True)
+        audio = render_actions(steady_actions(instrument, notes, config),
+                               instrument=instrument, sample_rate=SAMPLE_RATE, seed=0)
+        starts = note_starts(len(notes))
+        notes["loudness"] = note_loudness(audio, SAMPLE_RATE, starts + SKIP, starts + NOTE,
+                                          skip=0.0)
+        parts.append(notes)
+    notes = pd.concat(parts, ignore_index=True)
     notes.insert(0, "instrument", instrument)
     return notes
 
@@ -84,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     table = pd.concat(tables, ignore_index=True)
     table["key"] = key
     write_table(table, args.out, LOUDNESS_CALIBRATION)
-    mf = table[table["level"] == 5.0]
+    mf = table[(table["level"] == 5.0) & (table["semitone"] % 1.0 == 0.0)]
     summary = {
         "key": key, "table": args.out, "elapsed_s": round(time.perf_counter() - t0, 1),
         "mf_lufs": {n: {"median": round(float(g["loudness"].median()), 2),

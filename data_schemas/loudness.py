@@ -1,6 +1,7 @@
 """The loudness calibration table: how loud the instrument model plays a steady note.
 
-One row per instrument, string, finger position and dynamic level, measured by
+Rows per instrument, string, finger position and dynamic level (one for each bow direction;
+at mf also positions 10 cents flat and sharp of each stopped one), measured by
 ``bench/calibrate_loudness.py`` (steady notes at the rules' bow lanes, BS.1770 loudness);
 the rules read it to even out loudness like a player (``pipelines/perform/loudness.py``).
 """
@@ -15,7 +16,8 @@ LOUDNESS_CALIBRATION = TableSpec(
     name="loudness_calibration",
     version="1.0",
     description="Loudness of steady notes played by the instrument model at the rules' bow "
-                "lanes, one row per instrument, string, finger position and dynamic level.",
+                "lanes, rows per instrument, string, finger position (and at mf 10 cents "
+                "off it) and dynamic level, one for each bow direction.",
     columns=(
         Column("instrument", pa.string(), "", "violin, viola or cello."),
         Column("string", pa.int8(), "1", "String index, 0 = lowest.", minimum=0, maximum=3),

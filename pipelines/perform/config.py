@@ -22,6 +22,8 @@ from data_schemas.errors import ParameterError
 from data_schemas.instruments import INSTRUMENT_NAMES, dynamics_table, instrument_facts, limits
 
 _N_LEVELS = 10
+#: dB a level below pppp (velocity and force scaled together at the pppp lane's beta).
+QUIET_DB = 3.0
 
 
 @lru_cache(maxsize=1)
@@ -191,7 +193,7 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
 
 
 def _validate_loudness(config: dict[str, Any], source: str) -> None:
-    """``[loudness]``: a switch, a target in LUFS, a non-decreasing level curve, a shift."""
+    """``[loudness]``: a switch, a target in LUFS, a non-decreasing level curve, shifts."""
     cfg = config["loudness"]
     if not isinstance(cfg["enabled"], bool):
         raise ParameterError(f"{source}: loudness.enabled={cfg['enabled']!r} must be true or "
@@ -206,6 +208,9 @@ def _validate_loudness(config: dict[str, Any], source: str) -> None:
     if not _is_number(cfg["max_shift"]) or not 0.0 <= cfg["max_shift"] <= 9.0:
         raise ParameterError(f"{source}: loudness.max_shift={cfg['max_shift']!r} must be in "
                              "[0, 9] levels")
+    if not _is_number(cfg["below_pppp"]) or not 0.0 <= cfg["below_pppp"] <= 5.0:
+        raise ParameterError(f"{source}: loudness.below_pppp={cfg['below_pppp']!r} must be in "
+                             "[0, 5] levels")
 
 
 _VIBRATO_POSITIVE = ("rate", "onset_delay", "fade_in", "min_duration")
@@ -275,11 +280,27 @@ def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.nda
     key : str
         ``beta``, ``velocity`` (m/s) or ``force`` (multiples of the string's reference force).
     level : np.ndarray [shape=(n,)]
-        Dynamic levels on the 0..9 scale.
+        Dynamic levels on the 0..9 scale; below 0 (softer than pppp, where evening out
+        loudness needs it) the pppp lane's beta with velocity and force both scaled down by
+        :data:`QUIET_DB` dB a level: the Helmholtz window's edges (F_min ~ v / beta^2,
+        F_max ~ v / beta) scale with the velocity, so the note stays as far inside it as at
+        pppp, and its amplitude (~ v / beta) falls by the same dB.
 
     Returns
     -------
     np.ndarray [shape=(n,)]
+
+    Examples
+    --------
+    >>> cfg = load_config()
+    >>> [round(float(x), 4) for x in dynamic_table(cfg, "velocity", np.array([0.0, -2.0]))]
+    [0.08, 0.0401]
+    >>> float(dynamic_table(cfg, "beta", np.array([-2.0]))[0])
+    0.2
     """
     table = np.asarray(config["dynamics"][key], dtype=np.float64)
-    return np.interp(np.asarray(level, dtype=np.float64), np.arange(table.size), table)
+    level = np.asarray(level, dtype=np.float64)
+    out = np.interp(level, np.arange(table.size), table)
+    if key in ("velocity", "force"):
+        out = out * 10.0 ** (QUIET_DB * np.minimum(level, 0.0) / 20.0)
+    return out

@@ -3,15 +3,19 @@
 A player evens out the body's resonances and the strings' differences by bowing, not with a
 fader. The instrument model's loudness at the rules' bow lanes (beta, velocity, force per
 dynamic level, ``data_schemas/config/instruments.toml``) is measured once per instrument,
-string, finger position and level (``bench/calibrate_loudness.py`` writes
-``loudness_calibration.parquet`` beside this module). :func:`even_out` then moves each bowed
-event along the bow lanes -- faster and harder and nearer the bridge where the note sounds
-weak, slower, lighter and further from it where it booms -- to the level whose calibrated
-loudness is the dynamic's target: ``[loudness] mf`` LUFS plus ``[loudness] level_db`` of the
-marked level. The lanes stay in each string's playable window (force in multiples of the
-string's reference force), so the correction never leaves it; where the lanes end (pppp,
-ffff) or ``max_shift`` levels do not reach the target, the event is played as near as
-possible and counted in a warning.
+string, finger position and level, both bow directions, and at mf 10 cents flat and sharp
+(``bench/calibrate_loudness.py`` writes ``loudness_calibration.parquet`` beside this
+module). :func:`even_out` then moves each bowed event along the bow lanes -- faster and
+harder and nearer the bridge where the note sounds weak, slower, lighter and further from it
+where it booms -- to the level whose calibrated loudness (at the note's own position, level
+and intonation, :class:`Calibration`) is the dynamic's target: ``[loudness] mf`` LUFS plus
+``[loudness] level_db`` of the marked level, avoiding levels where the note spoke one bow
+direction only. The lanes stay in each string's playable window (force in multiples of the
+string's reference force), and so does their extension below pppp (``below_pppp`` levels:
+pppp's beta, velocity and force scaled down together,
+:func:`pipelines.perform.config.dynamic_table`); where the lanes end or ``max_shift``
+levels do not reach the target, the event is played as near as possible and counted in a
+warning.
 """
 
 from __future__ import annotations
@@ -24,10 +28,17 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from pipelines.perform.config import QUIET_DB
 from pipelines.perform.events import Event
 
 TABLE_PATH = Path(__file__).with_name("loudness_calibration.parquet")
 LEVELS = np.arange(10, dtype=np.float64)
+#: semitones: the calibration's mf notes flat and sharp of each stopped position.
+PITCH_OFFSET = 0.1
+#: dB: a pitch offset's measured effect beyond this is a failed note, not a resonance.
+PITCH_LIMIT = 4.0
+#: dB: a calibration note this far from the median of it and its level neighbours failed.
+OUTLIER_DB = 2.0
 _SOURCES = (Path(__file__).resolve().parents[2] / "synth" / "config" / "strings.toml",
             Path(__file__).resolve().parents[2] / "data_schemas" / "config" / "instruments.toml")
 
@@ -62,14 +73,61 @@ def load_calibration(path: str | Path | None = None) -> pd.DataFrame:
     return _read(str(path or TABLE_PATH))
 
 
+def robust_surface(loud: np.ndarray, *, iterations: int = 4) -> np.ndarray:
+    """A string's loudness surface with isolated failed notes replaced.
+
+    Parameters
+    ----------
+    loud : np.ndarray [shape=(positions, levels)], LUFS
+        Measured loudness of one string at every calibrated finger position and lane level.
+    iterations : int
+        Rounds of Tukey's median polish.
+
+    Returns
+    -------
+    np.ndarray [shape=(positions, levels)], LUFS
+        ``position + level + residual``: the median polish's additive fit (a position's
+        loudness at mf, the string's level curve) plus each position's own deviation from
+        it. A deviation more than :data:`OUTLIER_DB` from the median of it and its two
+        level neighbours (at the lanes' ends: its neighbour and the line through the next
+        two) is a steady calibration note that fell out of Helmholtz motion; it is replaced
+        by its neighbours' mean (at an end, the line), while a position's own curve -- a
+        resonance that grows or shrinks with the bow's spectrum -- is kept as measured.
+
+    Examples
+    --------
+    >>> truth = np.add.outer([-20.0, -30.0, -26.0], np.arange(5.0) * 3.0)
+    >>> measured = truth.copy(); measured[0, 2] -= 9.0     # one note failed
+    >>> bool(np.allclose(robust_surface(measured), truth))
+    True
+    """
+    loud = np.asarray(loud, dtype=np.float64)
+    resid = loud - np.median(loud)
+    for _ in range(iterations):  # what is left after the positions' and levels' medians
+        resid -= np.median(resid, axis=1)[:, None]
+        resid -= np.median(resid, axis=0)[None, :]
+    fit = loud - resid
+    if loud.shape[1] >= 3:
+        # each level's neighbours; at an end, the neighbour and the line through the next two
+        left = np.column_stack([2 * resid[:, 1] - resid[:, 2], resid[:, :-1]])
+        right = np.column_stack([resid[:, 1:], 2 * resid[:, -2] - resid[:, -3]])
+        failed = np.abs(resid - np.median(np.stack([left, resid, right]), axis=0)) > OUTLIER_DB
+        resid = np.where(failed, 0.5 * (left + right), resid)
+    return fit + resid
+
+
 class Calibration:
     """Calibrated loudness of one instrument at any string, finger position and level.
 
-    ``loudness(string, semitone, level)`` is the steady loudness (LUFS) measured at mf on
-    that string and position plus the string's measured level curve (loudness at each level
-    re mf, the median over the measured positions). Positions are taken at the nearest
-    calibrated semitone: the body's resonances are narrower than a semitone, so a note's
-    intonation offset or vibrato does not move it between calibrated neighbours.
+    ``loudness(string, semitone, level)`` is the steady loudness (LUFS) measured on that
+    string at the nearest calibrated position at every lane level (:func:`robust_surface`:
+    a failed calibration note replaced by its neighbours' trend), interpolated linearly
+    between levels (below pppp: :data:`pipelines.perform.config.QUIET_DB` dB a level, the
+    lanes' extension), plus how much louder or softer the position sounds when the finger is
+    off it by the note's intonation: measured at mf :data:`PITCH_OFFSET` semitones flat and
+    sharp and interpolated (a body resonance is sharp enough that 10 cents move a note's
+    loudness by a dB or two; an effect beyond :data:`PITCH_LIMIT` dB is taken for a failed
+    note and ignored).
     """
 
     def __init__(self, table: pd.DataFrame, instrument: str):
@@ -78,21 +136,63 @@ class Calibration:
         rows = table[table["instrument"] == instrument]
         if rows.empty:
             raise ParameterError(f"no loudness calibration for instrument {instrument!r}")
-        self.mf: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self.curve: dict[int, np.ndarray] = {}
+        self.grid: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self.pitch: dict[int, np.ndarray] = {}
+        self.fragile: dict[int, np.ndarray] = {}
         for s, g in rows.groupby("string"):
-            at_mf = g[g["level"] == 5.0].sort_values("semitone")
-            self.mf[int(s)] = (at_mf["semitone"].to_numpy(), at_mf["loudness"].to_numpy())
-            levels = g[g["semitone"].isin(g.loc[g["level"] != 5.0, "semitone"])]
-            wide = levels.pivot_table(index="semitone", columns="level", values="loudness")
-            rel = wide.sub(wide[5.0], axis=0).median(axis=0)  # robust to a note that fails
-            self.curve[int(s)] = np.interp(LEVELS, rel.index.to_numpy(), rel.to_numpy())
+            whole = g["semitone"] % 1.0 == 0.0
+            cells = g[whole].groupby(["semitone", "level"])["loudness"]
+            mean, top = cells.mean().unstack(), cells.max().unstack()
+            if mean.isna().any().any() or mean.shape[1] != LEVELS.size:
+                raise ParameterError(f"the loudness calibration of {instrument} string {s} "
+                                     "does not hold every position at every level (run "
+                                     "bench/calibrate_loudness.py)")
+            # the two bows disagree: the note speaks one way only; the one that spoke counts
+            fragile = (top - cells.min().unstack()).to_numpy() > OUTLIER_DB
+            loud = np.where(fragile, top.to_numpy(), mean.to_numpy())
+            positions = mean.index.to_numpy(np.float64)
+            self.grid[int(s)] = (positions, mean.columns.to_numpy(np.float64),
+                                 robust_surface(loud))
+            self.fragile[int(s)] = fragile
+            self.pitch[int(s)] = self._pitch_effect(g[~whole & (g["level"] == 5.0)],
+                                                    positions, loud[:, 5])
+
+    @staticmethod
+    def _pitch_effect(off: pd.DataFrame, positions: np.ndarray,
+                      at_mf: np.ndarray) -> np.ndarray:
+        """Loudness re the position at mf (dB): flat / on / sharp, shape (positions, 3)."""
+        effect = np.zeros((positions.size, 3))
+        for q, loud in zip(off["semitone"].to_numpy(), off["loudness"].to_numpy(),
+                           strict=True):
+            i = int(np.argmin(np.abs(positions - q)))
+            if abs(abs(q - positions[i]) - PITCH_OFFSET) > 1e-6:
+                continue
+            d = loud - at_mf[i]
+            effect[i, 0 if q < positions[i] else 2] = d if abs(d) <= PITCH_LIMIT else 0.0
+        return effect
 
     def loudness(self, string: int, semitone: float, level: np.ndarray) -> np.ndarray:
         """Calibrated loudness (LUFS) of ``string`` at ``semitone`` and dynamic ``level``."""
-        xs, ys = self.mf[string]
-        base = float(np.interp(np.round(semitone), xs, ys))
-        return base + np.interp(np.asarray(level, np.float64), LEVELS, self.curve[string])
+        positions, levels, surface = self.grid[string]
+        i = int(np.argmin(np.abs(positions - np.round(semitone))))
+        shift = float(np.interp(semitone - positions[i], [-PITCH_OFFSET, 0.0, PITCH_OFFSET],
+                                self.pitch[string][i]))
+        level = np.asarray(level, np.float64)
+        quiet = QUIET_DB * np.minimum(level, 0.0)  # below pppp (config.dynamic_table)
+        return np.interp(level, levels, surface[i]) + shift + quiet
+
+    def speaks(self, string: int, semitone: float, level: np.ndarray) -> np.ndarray:
+        """Whether the calibration's note spoke both ways at the levels around ``level``.
+
+        False within a level of a fragile calibrated level. Below pppp (not calibrated both
+        ways) a note counts as speaking: the scaled lane keeps pppp's place in the window.
+        """
+        positions, levels, _ = self.grid[string]
+        bad = levels[self.fragile[string][int(np.argmin(np.abs(positions -
+                                                                 np.round(semitone))))]]
+        level = np.asarray(level, np.float64)
+        near = np.any(np.abs(level[:, None] - bad[None, :]) < 1.0, axis=1)
+        return ~near | (level < 0.0)
 
 
 def target(config: dict[str, Any], level: float) -> float:
@@ -102,17 +202,32 @@ def target(config: dict[str, Any], level: float) -> float:
 
 
 def bowed_level(cal: Calibration, strings: list[int], semitones: list[float],
-                goal: float, max_shift: float, marked: float) -> tuple[float, bool]:
+                goal: float, max_shift: float, marked: float,
+                below: float = 0.0) -> tuple[float, bool]:
     """The lane level whose calibrated loudness on these strings is ``goal`` LUFS.
 
-    Returns the level and whether it fell short (lanes' end or ``max_shift``).
+    Levels run from ``-below`` (softer than pppp) to 9, at most ``max_shift`` from
+    ``marked``. Returns the level and whether it fell short (lanes' end or ``max_shift``).
+    Where the calibrated curve crosses the goal more than once (a curve that is not monotonic), the
+    crossing nearest the marked level wins; where it does not cross, the nearest level.
+    Levels within one of a level where the calibration's note spoke one bow direction only
+    (:meth:`Calibration.speaks`) are avoided, as a player avoids a bowing that does not
+    speak.
     """
-    grid = np.linspace(max(0.0, marked - max_shift), min(9.0, marked + max_shift), 121)
+    grid = np.linspace(max(-below, marked - max_shift), min(9.0, marked + max_shift), 241)
     power = np.mean([10.0 ** (cal.loudness(s, q, grid) / 10.0)
                      for s, q in zip(strings, semitones, strict=True)], axis=0)
-    level_db = 10.0 * np.log10(power)
-    best = int(np.argmin(np.abs(level_db - goal)))
-    return float(grid[best]), bool(abs(level_db[best] - goal) > 0.5)
+    diff = 10.0 * np.log10(power) - goal
+    ok = np.all([cal.speaks(s, q, grid) for s, q in zip(strings, semitones, strict=True)],
+                axis=0)
+    if not ok.any():  # fragile everywhere in reach: take the loudness alone
+        ok[:] = True
+    k = np.flatnonzero((np.sign(diff[:-1]) != np.sign(diff[1:])) & ok[:-1] & ok[1:])
+    if k.size:  # linear interpolation inside each bracketing step
+        levels = grid[k] + (grid[k + 1] - grid[k]) * diff[k] / (diff[k] - diff[k + 1])
+        return float(levels[np.argmin(np.abs(levels - marked))]), False
+    best = int(np.flatnonzero(ok)[np.argmin(np.abs(diff[ok]))])
+    return float(grid[best]), bool(abs(diff[best]) > 0.5)
 
 
 def even_out(events: list[Event], instrument: str, config: dict[str, Any],
@@ -127,7 +242,7 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     instrument : str
     config : dict
         Rules configuration (``[loudness]``: ``enabled``, ``mf``, ``level_db``,
-        ``max_shift``).
+        ``max_shift``, ``below_pppp``).
     warnings : list of str, optional
         Receives a note when some events could not reach their target loudness.
 
@@ -150,11 +265,11 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
             continue
         marked, marked_next = e.dynamic, e.dynamic_next
         e.dynamic, miss = bowed_level(cal, e.strings, e.semitones, target(config, marked),
-                                      cfg["max_shift"], marked)
+                                      cfg["max_shift"], marked, cfg["below_pppp"])
         if marked_next is not None:
             e.dynamic_next, miss_next = bowed_level(
                 cal, e.strings, e.semitones, target(config, marked_next), cfg["max_shift"],
-                marked_next)
+                marked_next, cfg["below_pppp"])
             miss = miss or miss_next
         short += miss
     if short and warnings is not None:
