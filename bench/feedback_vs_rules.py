@@ -45,7 +45,7 @@ def measure(models: str, seeds: list[int], methods: list[str], scores: list[str]
                 for method in methods:
                     out = render_method(method, notes, [part], stem=name, config=config,
                                         models=models, seed=seed)
-                    fig = evaluate_output(out, sample_rate=44100, config=config)
+                    fig, _ = evaluate_output(out, sample_rate=44100, config=config)
                     rows.append({"score": name[:24], "instrument": instrument, "seed": seed,
                                  "method": method, **{f: fig[f] for f in FIGURES}})
                     print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
