@@ -32,7 +32,7 @@ from data_schemas.errors import ArcoError
 from data_schemas.gesture_db import GESTURE_DB_VERSION
 from data_schemas.io import atomic_path
 from data_schemas.paths import inside
-from gesture_db.regressor_arrays import predict_arrays, regressor_arrays
+from gesture_db.regressor_arrays import pair_products, predict_arrays, regressor_arrays
 
 #: 1.x: pickles (refused: loading a pickle can run code); 2.x: npz arrays + JSON.
 PREDICTORS_VERSION = "2.0"
@@ -41,12 +41,17 @@ PREDICTORS_DIR = "predictors"
 CONTEXT_COLUMNS = ("log2_duration", "effective_string_length", "string", "dynamic",
                    "prev_log2_ratio", "next_log2_ratio", "prev_interval", "next_interval",
                    "has_prev", "has_next", "phrase_position", "log2_run_length",
-                   "scale_length")
+                   "scale_length", "prev_string_change", "next_string_change")
 #: Regressors available per group (``mean`` predicts the group's mean features).
-CANDIDATES = ("mean", "ridge", "tree", "extra_trees", "gradient_boosting")
+CANDIDATES = ("mean", "ridge", "ridge_pairs", "tree", "extra_trees", "gradient_boosting")
 #: Regressors tried by default: gradient boosting (one booster per feature) took ~75 % of
 #: the fitting time on a 4,000-note database and won no group, so it is opt-in.
-DEFAULT_CANDIDATES = ("mean", "ridge", "tree", "extra_trees")
+DEFAULT_CANDIDATES = ("mean", "ridge", "ridge_pairs", "tree", "extra_trees")
+#: Context columns whose products (squares included) ``ridge_pairs`` adds: the effects of
+#: the simulated performer multiply (speed ~ dynamic x note length x phrase shape).
+PAIR_COLUMNS = ("log2_duration", "effective_string_length", "dynamic", "phrase_position")
+#: Penalties the ridge regressor chooses from by inner leave-one-out CV (standardised inputs).
+RIDGE_ALPHAS = tuple(float(a) for a in np.logspace(-1, 3, 9))
 #: Fewer notes (or recordings) than this: the group predicts its mean, not cross-validated.
 MIN_NOTES = 12
 MIN_RECORDINGS = 2
@@ -74,7 +79,8 @@ def context_features(notes: pd.DataFrame, sequence: np.ndarray | None = None) ->
         predecessor / successor); missing neighbours give ratio and interval 0. The phrase
         position is the note's place in its run (0 first .. 1 last, 0 alone), the run length
         its notes; the scale length (m) is the instrument's (an ``instrument`` column;
-        default violin).
+        default violin); the string changes are the signed string steps from the previous
+        note and to the next one inside the run (a crossing ahead changes the stroke).
 
     Examples
     --------
@@ -99,13 +105,16 @@ def context_features(notes: pd.DataFrame, sequence: np.ndarray | None = None) ->
     next_int = np.where(has_next, np.r_[pitch[1:], pitch[-1:]] - pitch, 0.0)
     safe = np.maximum(dur, 1e-3)
     pos, length = _run_places(has_prev)
+    string = notes["string"].to_numpy(np.float64)
+    prev_str = np.where(has_prev, string - np.r_[string[:1], string[:-1]], 0.0)
+    next_str = np.where(has_next, np.r_[string[1:], string[-1:]] - string, 0.0)
     return np.column_stack([
         np.log2(safe), notes["effective_string_length"].to_numpy(np.float64),
-        notes["string"].to_numpy(np.float64), notes["dynamic"].to_numpy(np.float64),
+        string, notes["dynamic"].to_numpy(np.float64),
         np.log2(np.maximum(prev_dur, 1e-3) / safe), np.log2(np.maximum(next_dur, 1e-3) / safe),
         np.clip(prev_int, -12, 12), np.clip(next_int, -12, 12),
         has_prev.astype(float), has_next.astype(float), pos, np.log2(length),
-        _scale_lengths(notes)])
+        _scale_lengths(notes), prev_str, next_str])
 
 
 def _run_places(has_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -152,26 +161,36 @@ def db_context(notes: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
 def _make(name: str, seed: int):
     from sklearn.dummy import DummyRegressor
     from sklearn.ensemble import ExtraTreesRegressor, GradientBoostingRegressor
-    from sklearn.linear_model import Ridge
+    from sklearn.linear_model import RidgeCV
     from sklearn.multioutput import MultiOutputRegressor
     from sklearn.pipeline import make_pipeline
-    from sklearn.preprocessing import StandardScaler
+    from sklearn.preprocessing import FunctionTransformer, StandardScaler
     from sklearn.tree import DecisionTreeRegressor
 
     if name == "mean":
         return DummyRegressor()
     if name == "ridge":
-        return make_pipeline(StandardScaler(), Ridge(alpha=1.0))
+        # the penalty chosen by the training notes' own (efficient leave-one-out) CV
+        return make_pipeline(StandardScaler(), RidgeCV(alphas=RIDGE_ALPHAS))
+    if name == "ridge_pairs":
+        return make_pipeline(FunctionTransformer(pair_products, kw_args={"pairs": _pairs()}),
+                             StandardScaler(), RidgeCV(alphas=RIDGE_ALPHAS))
     if name == "tree":
         return DecisionTreeRegressor(max_depth=6, min_samples_leaf=8, random_state=seed)
     if name == "extra_trees":
-        return ExtraTreesRegressor(n_estimators=30, min_samples_leaf=4, max_features=0.7,
+        return ExtraTreesRegressor(n_estimators=60, min_samples_leaf=2, max_features=0.5,
                                    n_jobs=1, random_state=seed)
     if name == "gradient_boosting":
         return MultiOutputRegressor(GradientBoostingRegressor(
             n_estimators=60, max_depth=3, learning_rate=0.1, subsample=0.8,
             random_state=seed))
     raise ValueError(name)
+
+
+def _pairs() -> np.ndarray:
+    """Column pairs (i <= j) of :data:`PAIR_COLUMNS` in the context matrix."""
+    idx = [CONTEXT_COLUMNS.index(c) for c in PAIR_COLUMNS]
+    return np.array([(a, b) for k, a in enumerate(idx) for b in idx[k:]], np.int64)
 
 
 @dataclass
