@@ -47,9 +47,8 @@ def _nested(notes, X, rec, groups: list[str]) -> dict[str, float]:
     """Per group, the LORO MAE when each held-out take's models are chosen without it.
 
     For each take, every group's candidates are scored leave one recording out on the
-    other takes and chosen as :func:`gesture_db.predict.fit_predictors` does (per group
-    from :data:`~gesture_db.predict.CHOICE_RECORDINGS` recordings, else pooled), then
-    fitted on the other takes and scored on the held-out one.
+    other takes and the best chosen as :func:`gesture_db.predict.fit_predictors` does,
+    then fitted on the other takes and scored on the held-out one.
     """
     import warnings
 
@@ -57,11 +56,9 @@ def _nested(notes, X, rec, groups: list[str]) -> dict[str, float]:
 
     from gesture_db.predict import (
         CANDIDATES,
-        CHOICE_RECORDINGS,
         DEFAULT_CANDIDATES,
         _loro_mae,
         _make,
-        pooled_choice,
     )
 
     data = {}
@@ -77,15 +74,12 @@ def _nested(notes, X, rec, groups: list[str]) -> dict[str, float]:
             ok = np.unique(r[train]).size >= 2 and train.sum() >= 12
             scores[g] = ({c: _loro_mae(c, Xg[train], F[train], r[train], scale, 0, 6)
                           for c in DEFAULT_CANDIDATES} if ok else {}, int(train.sum()))
-        pooled = pooled_choice(scores)
         for g, (Xg, F, r, _scale) in data.items():
             test, train = r == held, r != held
             if not test.any():
                 continue
             got = scores[g][0]
-            best = ("mean" if not got else pooled
-                    if np.unique(r[train]).size < CHOICE_RECORDINGS
-                    else min(got, key=lambda k: (got[k], CANDIDATES.index(k))))
+            best = min(got, key=lambda k: (got[k], CANDIDATES.index(k))) if got else "mean"
             est = _make(best, 0)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")

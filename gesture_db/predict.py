@@ -50,10 +50,6 @@ RIDGE_ALPHAS = tuple(float(a) for a in np.logspace(-1, 3, 9))
 #: Fewer notes (or recordings) than this: the group predicts its mean, not cross-validated.
 MIN_NOTES = 12
 MIN_RECORDINGS = 2
-#: A group with fewer recordings than this takes the candidate best over all groups
-#: (:func:`pooled_choice`): with two or three folds the per-group choice is mostly chance
-#: (at 1,000 simulated notes it was worse than any fixed choice in a nested check).
-CHOICE_RECORDINGS = 4
 
 
 class PredictorError(ArcoError):
@@ -190,9 +186,7 @@ def fit_predictors(db, *, candidates: tuple[str, ...] = DEFAULT_CANDIDATES,
     max_folds : int
         Model selection: leave-one-recording-out when a group has at most this many
         recordings, otherwise this many recording-grouped folds. The reported MAE of the
-        chosen model is always leave-one-recording-out over all the group's notes. Groups
-        of fewer than :data:`CHOICE_RECORDINGS` recordings take the candidate best over all
-        groups.
+        chosen model is always leave-one-recording-out over all the group's notes.
     seed : int
         Seed of the regressors and of the subsampling.
     progress : bool
@@ -221,32 +215,9 @@ def fit_predictors(db, *, candidates: tuple[str, ...] = DEFAULT_CANDIDATES,
         scores = _group_scores(X_all[rows], F, rec_all[rows], candidates, rng,
                                max_notes=max_notes, max_folds=max_folds, seed=seed)
         jobs[group] = (X_all[rows], F, rec_all[rows], scores)
-    pooled = pooled_choice({g: (j[3], len(j[1])) for g, j in jobs.items()})
-    out = {g: _fit_group(X, F, rec, scores, pooled, seed)
+    out = {g: _fit_group(X, F, rec, scores, seed)
            for g, (X, F, rec, scores) in jobs.items()}
     return Predictors(out, _meta(db, out))
-
-
-def pooled_choice(scores: dict[str, tuple[dict[str, float], int]]) -> str:
-    """The candidate with the lowest note-weighted error relative to the mean's over groups.
-
-    Parameters
-    ----------
-    scores : dict of str to (dict of str to float, int)
-        Per group, the candidates' cross-validated MAE and the group's notes.
-
-    Examples
-    --------
-    >>> pooled_choice({"a": ({"mean": 1.0, "ridge": 0.5, "tree": 0.4}, 10),
-    ...                "b": ({"mean": 1.0, "ridge": 0.6, "tree": 0.9}, 30)})
-    'ridge'
-    """
-    total: dict[str, float] = {}
-    for got, n in scores.values():
-        if got and got.get("mean", 0.0) > 0:
-            for name, mae in got.items():
-                total[name] = total.get(name, 0.0) + n * mae / got["mean"]
-    return min(total, key=lambda k: (total[k], CANDIDATES.index(k))) if total else "mean"
 
 
 def _group_scores(X: np.ndarray, F: np.ndarray, rec: np.ndarray, candidates: tuple[str, ...],
@@ -268,19 +239,16 @@ def _group_scores(X: np.ndarray, F: np.ndarray, rec: np.ndarray, candidates: tup
 
 
 def _fit_group(X: np.ndarray, F: np.ndarray, rec: np.ndarray, scores: dict[str, float],
-               pooled: str, seed: int) -> GroupPredictor:
-    """Choose, score and fit the regressor of one group.
+               seed: int) -> GroupPredictor:
+    """Choose (the best of ``scores``), score and fit the regressor of one group.
 
-    A group of at least :data:`CHOICE_RECORDINGS` recordings takes its own best candidate;
-    a smaller one, whose few folds choose by chance, the ``pooled`` choice
-    (:func:`pooled_choice`). The reported error is the chosen model's, leave one recording
-    out on all the group's notes.
+    The reported error is the chosen model's, leave one recording out on all the group's
+    notes (the folds that chose it: slightly optimistic, see the bench's ``--nested``).
     """
     scale = np.maximum(F.std(axis=0), 1e-9)
     n_rec = np.unique(rec).size
     if scores:
-        best = (min(scores, key=lambda k: (scores[k], CANDIDATES.index(k)))
-                if n_rec >= CHOICE_RECORDINGS or pooled not in scores else pooled)
+        best = min(scores, key=lambda k: (scores[k], CANDIDATES.index(k)))
         mae = _loro_mae(best, X, F, rec, scale, seed, max_folds=n_rec)
     else:
         best, mae = "mean", float("nan")
