@@ -4,9 +4,12 @@ Maestre (2010) predicts the PCA features f of a note from its performance contex
 model tree per group (mean absolute error ~0.2). Here each group gets whichever of a few
 scikit-learn regressors cross-validates best, leaving one recording (take) out at a time;
 errors are in PCA-normalised units (each feature divided by its standard deviation in the
-group). The context of a note (:data:`CONTEXT_COLUMNS`) is its duration, effective string
-length, string, dynamic and its neighbours in the same run (duration ratios and pitch
-intervals).
+group). The context of a note (:data:`CONTEXT_COLUMNS`, :mod:`gesture_db.context`) is its
+duration, effective string length, string, dynamic, its neighbours in the same run
+(duration ratios, pitch intervals, string changes), its place in the run, the run's length
+and the instrument's scale length. The candidates (:data:`DEFAULT_CANDIDATES`) are the
+group mean, ridge regressions (penalty chosen by inner leave-one-out; ``ridge_pairs`` adds
+products of :data:`PAIR_COLUMNS`), a tree and extra trees.
 
 The fitted predictors are stored beside the database under ``predictors/`` as numeric
 arrays only (``gen-<generation>.npz``, read with ``allow_pickle=False``: loading never runs
