@@ -58,12 +58,19 @@ class BuildParams:
         1 the features are mostly fit noise that no context predicts.
     feature_variance : float
         Keep the fewest components that explain this share of the (weighted) variance.
+    scale_floor : float
+        Before the PCA, each entry of p is divided by its standard deviation floored at
+        this share of the largest in its block (parameter x values / shares / handles,
+        :meth:`gesture_db.groups.Grammar.blocks`). At 0 (before issue 14) the speed at a
+        bow change, which barely varies, weighed as much as the note's loudness and took a
+        whole component of boundary jitter that no context predicts.
     """
 
     max_candidates: int = 24
     reduction: float = 4.5
     shape_weight: float = 0.2
     feature_variance: float = 0.8
+    scale_floor: float = 0.25
 
 
 def process_source(source: Source, params: BuildParams,
@@ -318,9 +325,11 @@ def _commit_models(db: Path, sources: dict[str, dict], generation: int, params: 
     for group in tqdm(groups, desc="group models", unit="group", disable=not progress):
         g = notes[notes["group"] == group].copy()
         P = np.vstack(g["params"].to_numpy())
-        weights = np.where(grammar_for(group).value_mask(), 1.0, params.shape_weight)
+        grammar = grammar_for(group)
+        weights = np.where(grammar.value_mask(), 1.0, params.shape_weight)
         model = fit_group_model(P, reduction=params.reduction, weights=weights,
-                                variance=params.feature_variance)
+                                variance=params.feature_variance, blocks=grammar.blocks(),
+                                floor_share=params.scale_floor)
         F = model.transform(P)
         g["features"] = [f.tolist() for f in F]
         hand = _left_hand_block(g, params)

@@ -101,7 +101,8 @@ def n_components_for(dim: int, n_samples: int, *, reduction: float = 4.5) -> int
 
 def fit_group_model(p: np.ndarray, *, n_components: int | None = None,
                     reduction: float = 4.5, weights: np.ndarray | None = None,
-                    variance: float = 1.0) -> GroupModel:
+                    variance: float = 1.0, blocks: np.ndarray | None = None,
+                    floor_share: float = 0.0) -> GroupModel:
     """Fit PCA and the regularised Gaussian of one group.
 
     Parameters
@@ -118,6 +119,14 @@ def fit_group_model(p: np.ndarray, *, n_components: int | None = None,
     variance : float
         Without ``n_components``: keep no more components than explain this share of the
         variance (at least 2, at most ``d / reduction``); 1 keeps ``d / reduction``.
+    blocks : np.ndarray [shape=(d,)], optional
+        A label per entry of p: entries of one block share a unit (e.g. the segment values
+        of the velocity, m/s). With ``floor_share``, an entry's standard deviation is
+        floored at ``floor_share`` times the largest of its block before standardising,
+        so that an entry that barely varies (the speed at a bow change, ~0) is not
+        inflated to the weight of one that carries the note's loudness.
+    floor_share : float
+        See ``blocks``; 0 standardises every entry by its own standard deviation.
 
     Returns
     -------
@@ -140,7 +149,10 @@ def fit_group_model(p: np.ndarray, *, n_components: int | None = None,
     w = np.ones(d) if weights is None else np.asarray(weights, float)
     if w.shape != (d,) or not np.all(w > 0):
         raise ParameterError(f"weights must be {d} positive numbers")
-    scale = np.maximum(p.std(axis=0), SCALE_FLOOR) / w
+    scale = np.maximum(p.std(axis=0), SCALE_FLOOR)
+    if blocks is not None and floor_share > 0:
+        scale = np.maximum(scale, floor_share * _block_max(scale, np.asarray(blocks)))
+    scale = scale / w
     z = (p - mean) / scale
     _u, s, vt = np.linalg.svd(z, full_matrices=False)
     if n_components is None and variance < 1.0 and np.sum(s**2) > 0:
@@ -161,6 +173,17 @@ def fit_group_model(p: np.ndarray, *, n_components: int | None = None,
     f = z @ comps.T
     f_mean, cov, alpha = regularised_gaussian(f)
     return GroupModel(mean, scale, comps, evr, f_mean, cov, alpha)
+
+
+def _block_max(values: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """For each entry, the largest of ``values`` over the entries of its block."""
+    if blocks.shape != values.shape:
+        raise ParameterError(f"blocks must label each of the {values.size} entries")
+    out = np.empty_like(values)
+    for label in np.unique(blocks):
+        mask = blocks == label
+        out[mask] = values[mask].max()
+    return out
 
 
 def regularised_gaussian(f: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:

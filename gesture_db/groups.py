@@ -111,6 +111,24 @@ class Grammar:
             out += [False] * n + [True] * (n + 1) + [False] * (2 * n)
         return np.array(out, bool)
 
+    def blocks(self) -> np.ndarray:
+        """Block label of each entry of the contour vector: parameter x kind.
+
+        The kinds are duration shares (0), segment values (1, in the parameter's unit) and
+        handle ratios (2); the label is ``3 * parameter index + kind``.
+
+        Examples
+        --------
+        >>> g = Grammar({"bow_velocity": ("f",), "bow_force": ("f",), "beta": ("f",)})
+        >>> g.blocks().tolist()[:6]
+        [0, 1, 1, 2, 2, 3]
+        """
+        out: list[int] = []
+        for k, param in enumerate(CONTOUR_PARAMS):
+            n = self.n_segments(param)
+            out += [3 * k] * n + [3 * k + 1] * (n + 1) + [3 * k + 2] * (2 * n)
+        return np.array(out, np.int64)
+
     def to_json(self) -> str:
         """Serialise as JSON."""
         return json.dumps({p: list(self.segments[p]) for p in CONTOUR_PARAMS})

@@ -9,8 +9,10 @@ recording and its annotation, with
 - bow planning inside the violin's bow hair (runs scaled down to fit the bow-travel budget
   :class:`data_schemas.bow.BowBudget`, retakes in rests with the bow lifted);
 - context effects: speed with note length and dynamic, force with dynamic and string (the
-  caller's per-string force factors), a crescendo over each run with sustained notes
-  tilting with it, accents on slur and run starts, the bow slowing before a leap;
+  caller's per-string force factors), contact point with bow speed (a slower bow nearer
+  the bridge), a crescendo and an arch over each run with sustained notes tilting with
+  the crescendo, accents on slur and run starts, the bow slowing before a leap and
+  lightening before a string crossing;
 - the left hand (:mod:`gesture_db.playing_left_hand`): intonation, vibrato and shifts in
   the finger and recorded as ``pitch_deviation_cents``, drawn from a stream of their own
   (``rng.spawn``) so the bowing signals are those the same seed gave before;
@@ -168,22 +170,32 @@ def phrase_positions(run: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def _context_factor(plan: pd.DataFrame, perf: Performer) -> tuple[np.ndarray, np.ndarray]:
-    """Velocity and force factors of the context: phrase crescendo, accents, leaps ahead.
+    """Velocity and force factors of the context: phrase shape, accents, leaps and crossings.
 
-    A run (phrase) swells by ``perf.crescendo`` from its first to its last note; the first
-    note of a slur or a run is accented by ``perf.accent`` (force); the bow slows before a
-    leap to the next note (``[magnitudes] leap_slowdown`` per octave).
+    A run (phrase) swells by ``perf.crescendo`` from its first to its last note and arches
+    by ``perf.phrase_arch`` (``sin(pi place) - 0.5``: fuller in the middle, lighter at the
+    ends); the first note of a slur or a run is accented by ``perf.accent`` (force); the
+    bow slows before a leap to the next note (``[magnitudes] leap_slowdown`` per octave)
+    and lightens and slows on the note before a string crossing inside a run
+    (``crossing_lift``, ``crossing_slow``: the arm prepares the new string's angle).
     """
     cfg = simulator_config()["magnitudes"]
     pos = plan["phrase_pos"].to_numpy()
-    swell = np.where(plan["run_length"].to_numpy() > 1, 1.0 + perf.crescendo * (pos - 0.5), 1.0)
+    length = plan["run_length"].to_numpy()
+    arch = np.where(length > 2, perf.phrase_arch * (np.sin(np.pi * pos) - 0.5), 0.0)
+    swell = np.where(length > 1, 1.0 + perf.crescendo * (pos - 0.5), 1.0) * (1.0 + arch)
     starts = (plan["slur_position"].isin(["init"]) | plan["run_position"].isin(["init"]))
     accent = 1.0 + perf.accent * starts.to_numpy()
     pitch = plan["midi_pitch"].to_numpy(float)
     run = plan["run"].to_numpy()
-    leap = np.r_[np.abs(np.diff(pitch)) * (run[1:] == run[:-1]), 0.0]
+    same_run = np.r_[run[1:] == run[:-1], False]
+    leap = np.r_[np.abs(np.diff(pitch)), 0.0] * same_run
     slow = 1.0 - cfg["leap_slowdown"] * np.minimum(leap / 12.0, 1.0)
-    return swell * slow, swell * accent
+    string = plan["string"].to_numpy(int)
+    crossing = np.r_[string[1:] != string[:-1], False] & same_run
+    lift = 1.0 - cfg["crossing_lift"] * crossing
+    slow = slow * (1.0 - cfg["crossing_slow"] * crossing)
+    return swell * slow, swell * accent * lift
 
 
 def _magnitudes(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator) -> dict:
@@ -210,7 +222,10 @@ def _magnitudes(plan: pd.DataFrame, perf: Performer, rng: np.random.Generator) -
     slur = plan["slur_position"].to_numpy()
     lean = cfg["slur_force"]
     force *= np.where(slur == "init", lean["init"], np.where(slur == "end", lean["end"], 1.0))
-    beta = b * perf.beta_scale * np.exp(rng.normal(0, var, n)) / np.sqrt(1.0 - fr)
+    # a slower bow plays closer to the bridge at the same dynamic (Schoonderwaldt 2009)
+    contact = length_factor ** cfg["beta_speed_exponent"]
+    beta = (b * perf.beta_scale * contact * np.exp(rng.normal(0, var, n))
+            / np.sqrt(1.0 - fr))
     accel = np.clip(perf.accel * np.exp(rng.normal(0, cfg["accel_sd"], n)), *cfg["accel_range"])
     accel = np.where(tech == "martele",
                      np.clip(perf.martele_accel * np.exp(rng.normal(0, cfg["martele_accel_sd"],
@@ -305,7 +320,10 @@ def _plan_bow(plan: pd.DataFrame, v: np.ndarray, force: np.ndarray, sl: Slicer,
             delta = pos[s.start] - prev_end_pos
             pos[a:b] = prev_end_pos + delta * ramp
             if abs(delta) > cfg["retake_min"] and a > 0:
-                v[a:b] += np.gradient(pos[a:b]) * fs * budget.bow_length
+                # a start window that leaves the retake out of reach cannot make the lifted
+                # bow faster than an arm moves it (its trace is capped, the plan is kept)
+                lifted = np.gradient(pos[a:b]) * fs * budget.bow_length
+                v[a:b] += np.clip(lifted, -cfg["retake_max_speed"], cfg["retake_max_speed"])
         prev_end_pos = pos[s.stop - 1]
         prev_stop_frame = s.stop
     pos[prev_stop_frame:] = prev_end_pos

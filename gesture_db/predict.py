@@ -4,9 +4,12 @@ Maestre (2010) predicts the PCA features f of a note from its performance contex
 model tree per group (mean absolute error ~0.2). Here each group gets whichever of a few
 scikit-learn regressors cross-validates best, leaving one recording (take) out at a time;
 errors are in PCA-normalised units (each feature divided by its standard deviation in the
-group). The context of a note (:data:`CONTEXT_COLUMNS`) is its duration, effective string
-length, string, dynamic and its neighbours in the same run (duration ratios and pitch
-intervals).
+group). The context of a note (:data:`CONTEXT_COLUMNS`, :mod:`gesture_db.context`) is its
+duration, effective string length, string, dynamic, its neighbours in the same run
+(duration ratios, pitch intervals, string changes), its place in the run, the run's length
+and the instrument's scale length. The candidates (:data:`DEFAULT_CANDIDATES`) are the
+group mean, ridge regressions (penalty chosen by inner leave-one-out; ``ridge_pairs`` adds
+products of :data:`PAIR_COLUMNS`), a tree and extra trees.
 
 The fitted predictors are stored beside the database under ``predictors/`` as numeric
 arrays only (``gen-<generation>.npz``, read with ``allow_pickle=False``: loading never runs
@@ -26,27 +29,27 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from data_schemas.errors import ArcoError
 from data_schemas.gesture_db import GESTURE_DB_VERSION
 from data_schemas.io import atomic_path
 from data_schemas.paths import inside
-from gesture_db.regressor_arrays import predict_arrays, regressor_arrays
+from gesture_db.context import CONTEXT_COLUMNS, context_features, db_context
+from gesture_db.regressor_arrays import pair_products, predict_arrays, regressor_arrays
 
 #: 1.x: pickles (refused: loading a pickle can run code); 2.x: npz arrays + JSON.
 PREDICTORS_VERSION = "2.0"
 PREDICTORS_DIR = "predictors"
-#: Context inputs of the regressors, in column order.
-CONTEXT_COLUMNS = ("log2_duration", "effective_string_length", "string", "dynamic",
-                   "prev_log2_ratio", "next_log2_ratio", "prev_interval", "next_interval",
-                   "has_prev", "has_next", "phrase_position", "log2_run_length",
-                   "scale_length")
 #: Regressors available per group (``mean`` predicts the group's mean features).
-CANDIDATES = ("mean", "ridge", "tree", "extra_trees", "gradient_boosting")
+CANDIDATES = ("mean", "ridge", "ridge_pairs", "tree", "extra_trees", "gradient_boosting")
 #: Regressors tried by default: gradient boosting (one booster per feature) took ~75 % of
 #: the fitting time on a 4,000-note database and won no group, so it is opt-in.
-DEFAULT_CANDIDATES = ("mean", "ridge", "tree", "extra_trees")
+DEFAULT_CANDIDATES = ("mean", "ridge", "ridge_pairs", "tree", "extra_trees")
+#: Context columns whose products (squares included) ``ridge_pairs`` adds: the effects of
+#: the simulated performer multiply (speed ~ dynamic x note length x phrase shape).
+PAIR_COLUMNS = ("log2_duration", "effective_string_length", "dynamic", "phrase_position")
+#: Penalties the ridge regressor chooses from by inner leave-one-out CV (standardised inputs).
+RIDGE_ALPHAS = tuple(float(a) for a in np.logspace(-1, 3, 9))
 #: Fewer notes (or recordings) than this: the group predicts its mean, not cross-validated.
 MIN_NOTES = 12
 MIN_RECORDINGS = 2
@@ -56,122 +59,39 @@ class PredictorError(ArcoError):
     """Predictors are missing, stale (another database generation) or of another version."""
 
 
-def context_features(notes: pd.DataFrame, sequence: np.ndarray | None = None) -> np.ndarray:
-    """Context matrix of notes given in playing order.
-
-    Parameters
-    ----------
-    notes : pandas.DataFrame
-        Rows in playing order with ``duration`` (s), ``effective_string_length`` (m),
-        ``string``, ``dynamic``, ``midi_pitch`` and ``run_position``.
-    sequence : np.ndarray [shape=(n,)], optional
-        Sequence key (e.g. the recording); neighbours are only taken within one key.
-
-    Returns
-    -------
-    np.ndarray [shape=(n, len(CONTEXT_COLUMNS))]
-        Neighbours count only inside a run (``run_position`` says whether the note has a
-        predecessor / successor); missing neighbours give ratio and interval 0. The phrase
-        position is the note's place in its run (0 first .. 1 last, 0 alone), the run length
-        its notes; the scale length (m) is the instrument's (an ``instrument`` column;
-        default violin).
-
-    Examples
-    --------
-    >>> notes = pd.DataFrame({"duration": [0.5, 0.5, 0.25], "effective_string_length": 0.3,
-    ...                       "string": 2, "dynamic": 5.0, "midi_pitch": [69, 71, 72],
-    ...                       "run_position": ["init", "mid", "end"]})
-    >>> context_features(notes)[:, [6, 10, 11]].round(3).tolist()
-    [[0.0, 0.0, 1.585], [2.0, 0.5, 1.585], [1.0, 1.0, 1.585]]
-    """
-    n = len(notes)
-    dur = notes["duration"].to_numpy(np.float64)
-    pitch = notes["midi_pitch"].to_numpy(np.float64)
-    run = notes["run_position"].astype(str).to_numpy()
-    seq = np.zeros(n) if sequence is None else np.asarray(sequence)
-    same_prev = np.r_[False, seq[1:] == seq[:-1]] if n else np.zeros(0, bool)
-    same_next = np.r_[seq[:-1] == seq[1:], False] if n else np.zeros(0, bool)
-    has_prev = same_prev & np.isin(run, ("mid", "end"))
-    has_next = same_next & np.isin(run, ("init", "mid"))
-    prev_dur = np.where(has_prev, np.r_[dur[:1], dur[:-1]], dur)
-    next_dur = np.where(has_next, np.r_[dur[1:], dur[-1:]], dur)
-    prev_int = np.where(has_prev, pitch - np.r_[pitch[:1], pitch[:-1]], 0.0)
-    next_int = np.where(has_next, np.r_[pitch[1:], pitch[-1:]] - pitch, 0.0)
-    safe = np.maximum(dur, 1e-3)
-    pos, length = _run_places(has_prev)
-    return np.column_stack([
-        np.log2(safe), notes["effective_string_length"].to_numpy(np.float64),
-        notes["string"].to_numpy(np.float64), notes["dynamic"].to_numpy(np.float64),
-        np.log2(np.maximum(prev_dur, 1e-3) / safe), np.log2(np.maximum(next_dur, 1e-3) / safe),
-        np.clip(prev_int, -12, 12), np.clip(next_int, -12, 12),
-        has_prev.astype(float), has_next.astype(float), pos, np.log2(length),
-        _scale_lengths(notes)])
-
-
-def _run_places(has_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Place of each note in its run (0..1) and the run's length, from the links back."""
-    n = has_prev.size
-    starts = np.flatnonzero(~has_prev) if n else np.zeros(0, int)
-    lengths = np.diff(np.r_[starts, n]).astype(float)
-    length = np.repeat(lengths, lengths.astype(int))
-    index = np.arange(n) - np.repeat(starts, lengths.astype(int))
-    return np.where(length > 1, index / np.maximum(length - 1, 1), 0.0), np.maximum(length, 1)
-
-
-def _scale_lengths(notes: pd.DataFrame) -> np.ndarray:
-    """Scale length (m) of each note's instrument (violin without an ``instrument`` column)."""
-    from data_schemas.instruments import instrument_facts
-
-    if "instrument" not in notes:
-        return np.full(len(notes), instrument_facts("violin").scale_length)
-    names = notes["instrument"].fillna("violin").astype(str).to_numpy()
-    table = {k: instrument_facts(k).scale_length for k in np.unique(names)}
-    return np.array([table[k] for k in names], np.float64)
-
-
-def db_context(notes: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
-    """Database notes in playing order and their context matrix.
-
-    Returns
-    -------
-    ordered : pandas.DataFrame
-        ``notes`` sorted by source, take and note index.
-    context : np.ndarray [shape=(n, len(CONTEXT_COLUMNS))]
-    """
-    ordered = notes.sort_values(["source_hash", "recording_id", "note_index"],
-                                kind="stable", ignore_index=True)
-    idx = ordered["note_index"].to_numpy()
-    seq = (ordered["source_hash"].astype(str) + ":" + ordered["recording_id"].astype(str))
-    seq = seq.to_numpy().astype(object)
-    # a dropped note breaks the neighbourhood: give the rest of the take a new key
-    gap = np.r_[False, np.diff(idx) != 1]
-    seq = np.array([f"{s}#{k}" for s, k in zip(seq, np.cumsum(gap), strict=True)], object)
-    return ordered, context_features(ordered, seq)
-
-
 def _make(name: str, seed: int):
     from sklearn.dummy import DummyRegressor
     from sklearn.ensemble import ExtraTreesRegressor, GradientBoostingRegressor
-    from sklearn.linear_model import Ridge
+    from sklearn.linear_model import RidgeCV
     from sklearn.multioutput import MultiOutputRegressor
     from sklearn.pipeline import make_pipeline
-    from sklearn.preprocessing import StandardScaler
+    from sklearn.preprocessing import FunctionTransformer, StandardScaler
     from sklearn.tree import DecisionTreeRegressor
 
     if name == "mean":
         return DummyRegressor()
     if name == "ridge":
-        return make_pipeline(StandardScaler(), Ridge(alpha=1.0))
+        # the penalty chosen by the training notes' own (efficient leave-one-out) CV
+        return make_pipeline(StandardScaler(), RidgeCV(alphas=RIDGE_ALPHAS))
+    if name == "ridge_pairs":
+        return make_pipeline(FunctionTransformer(pair_products, kw_args={"pairs": _pairs()}),
+                             StandardScaler(), RidgeCV(alphas=RIDGE_ALPHAS))
     if name == "tree":
         return DecisionTreeRegressor(max_depth=6, min_samples_leaf=8, random_state=seed)
     if name == "extra_trees":
-        return ExtraTreesRegressor(n_estimators=30, min_samples_leaf=4, max_features=0.7,
+        return ExtraTreesRegressor(n_estimators=60, min_samples_leaf=2, max_features=0.5,
                                    n_jobs=1, random_state=seed)
     if name == "gradient_boosting":
         return MultiOutputRegressor(GradientBoostingRegressor(
             n_estimators=60, max_depth=3, learning_rate=0.1, subsample=0.8,
             random_state=seed))
     raise ValueError(name)
+
+
+def _pairs() -> np.ndarray:
+    """Column pairs (i <= j) of :data:`PAIR_COLUMNS` in the context matrix."""
+    idx = [CONTEXT_COLUMNS.index(c) for c in PAIR_COLUMNS]
+    return np.array([(a, b) for k, a in enumerate(idx) for b in idx[k:]], np.int64)
 
 
 @dataclass
@@ -288,45 +208,50 @@ def fit_predictors(db, *, candidates: tuple[str, ...] = DEFAULT_CANDIDATES,
         raise ParameterError(f"candidates={list(candidates)} must be taken from {CANDIDATES}")
     notes, X_all = db_context(db.notes())
     rng = np.random.default_rng(seed)
-    out: dict[str, GroupPredictor] = {}
+    rec_all = (notes["source_hash"].astype(str) + ":"
+               + notes["recording_id"].astype(str)).to_numpy()
+    jobs = {}
     for group in tqdm(sorted(notes["group"].unique()), desc="predictors", unit="group",
                       disable=not progress):
         rows = np.flatnonzero(notes["group"].to_numpy() == group)
         F = np.vstack(notes["features"].to_numpy()[rows]).astype(np.float64)
-        rec = (notes["source_hash"].astype(str) + ":"
-               + notes["recording_id"].astype(str)).to_numpy()[rows]
-        out[group] = _fit_group(X_all[rows], F, rec, candidates, rng, max_notes=max_notes,
-                                max_folds=max_folds, seed=seed)
-    meta = _meta(db, out)
-    return Predictors(out, meta)
+        scores = _group_scores(X_all[rows], F, rec_all[rows], candidates, rng,
+                               max_notes=max_notes, max_folds=max_folds, seed=seed)
+        jobs[group] = (X_all[rows], F, rec_all[rows], scores)
+    out = {g: _fit_group(X, F, rec, scores, seed)
+           for g, (X, F, rec, scores) in jobs.items()}
+    return Predictors(out, _meta(db, out))
 
 
-def _fit_group(X: np.ndarray, F: np.ndarray, rec: np.ndarray, candidates: tuple[str, ...],
-               rng: np.random.Generator, *, max_notes: int, max_folds: int,
+def _group_scores(X: np.ndarray, F: np.ndarray, rec: np.ndarray, candidates: tuple[str, ...],
+                  rng: np.random.Generator, *, max_notes: int, max_folds: int,
+                  seed: int) -> dict[str, float]:
+    """Cross-validated MAE of each candidate on one group ({} when it is too small).
+
+    ``X`` [shape=(n, c)] are the group's contexts, ``F`` [shape=(n, k)] its PCA features,
+    ``rec`` each note's recording (the folds); the other arguments as
+    :func:`fit_predictors` (``rng`` draws the subsample of a large group).
+    """
+    scale = np.maximum(F.std(axis=0), 1e-9)
+    if len(F) < MIN_NOTES or np.unique(rec).size < MIN_RECORDINGS:
+        return {}
+    idx = (np.arange(len(F)) if len(F) <= max_notes
+           else np.sort(rng.choice(len(F), max_notes, replace=False)))
+    return {name: _loro_mae(name, X[idx], F[idx], rec[idx], scale, seed, max_folds)
+            for name in candidates}
+
+
+def _fit_group(X: np.ndarray, F: np.ndarray, rec: np.ndarray, scores: dict[str, float],
                seed: int) -> GroupPredictor:
-    """Choose, score and fit the regressor of one group.
+    """Choose (the best of ``scores``), score and fit the regressor of one group.
 
-    Parameters
-    ----------
-    X : np.ndarray [shape=(n, c)]
-        Context features of the group's notes.
-    F : np.ndarray [shape=(n, k)]
-        Their PCA features (the regression targets).
-    rec : np.ndarray [shape=(n,)], str
-        Recording of each note (the cross-validation groups).
-    candidates, max_notes, max_folds, seed
-        As :func:`fit_predictors`; ``rng`` draws the subsample of a large group.
+    The reported error is the chosen model's, leave one recording out on all the group's
+    notes (the folds that chose it: slightly optimistic, see the bench's ``--nested``).
     """
     scale = np.maximum(F.std(axis=0), 1e-9)
     n_rec = np.unique(rec).size
-    scores: dict[str, float] = {}
-    if len(F) >= MIN_NOTES and n_rec >= MIN_RECORDINGS:
-        idx = (np.arange(len(F)) if len(F) <= max_notes
-               else np.sort(rng.choice(len(F), max_notes, replace=False)))
-        for name in candidates:
-            scores[name] = _loro_mae(name, X[idx], F[idx], rec[idx], scale, seed, max_folds)
+    if scores:
         best = min(scores, key=lambda k: (scores[k], CANDIDATES.index(k)))
-        # The reported error: the chosen model, truly leave-one-recording-out on all notes.
         mae = _loro_mae(best, X, F, rec, scale, seed, max_folds=n_rec)
     else:
         best, mae = "mean", float("nan")

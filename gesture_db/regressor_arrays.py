@@ -7,6 +7,8 @@ code and needs no scikit-learn. Each candidate regressor becomes:
 - ``mean`` (DummyRegressor): ``constant`` [shape=(k,)];
 - ``ridge`` (StandardScaler + Ridge): ``mean``, ``scale`` [shape=(c,)], ``coef``
   [shape=(k, c)], ``intercept`` [shape=(k,)];
+- ``ridge_pairs`` (the inputs and products of pairs of them, :func:`pair_products`, then
+  as ``ridge``): ``pairs`` [shape=(m, 2)] and the ridge's arrays over the c + m inputs;
 - ``tree`` and ``extra_trees`` (one decision tree, or a forest averaged): the trees' nodes
   concatenated (:func:`forest_arrays`);
 - ``gradient_boosting`` (one booster per feature): per feature ``j`` a forest
@@ -25,6 +27,19 @@ import numpy as np
 
 #: Arrays of one forest (all trees' nodes concatenated; children are global node indices).
 FOREST_KEYS = ("roots", "left", "right", "feature", "threshold", "missing_left", "value")
+
+
+def pair_products(X: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """The inputs ``X`` [shape=(n, c)] followed by the products of the column ``pairs``.
+
+    Examples
+    --------
+    >>> pair_products(np.array([[2.0, 3.0]]), np.array([[0, 0], [0, 1]])).tolist()
+    [[2.0, 3.0, 4.0, 6.0]]
+    """
+    X = np.atleast_2d(np.asarray(X, np.float64))
+    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+    return np.hstack([X, X[:, pairs[:, 0]] * X[:, pairs[:, 1]]])
 
 
 def forest_arrays(trees: list[Any]) -> dict[str, np.ndarray]:
@@ -98,7 +113,8 @@ def regressor_arrays(name: str, estimator: Any) -> dict[str, np.ndarray]:
     Parameters
     ----------
     name : str
-        ``mean``, ``ridge``, ``tree``, ``extra_trees`` or ``gradient_boosting``.
+        ``mean``, ``ridge``, ``ridge_pairs``, ``tree``, ``extra_trees`` or
+        ``gradient_boosting``.
     estimator : object
         The fitted scikit-learn estimator built for ``name``.
 
@@ -123,6 +139,9 @@ def regressor_arrays(name: str, estimator: Any) -> dict[str, np.ndarray]:
                 "scale": np.asarray(scaler.scale_, np.float64),
                 "coef": coef.reshape(-1, coef.shape[-1]),
                 "intercept": np.asarray(ridge.intercept_, np.float64).ravel()}
+    if name == "ridge_pairs":
+        pairs = np.asarray(estimator[0].kw_args["pairs"], np.int64)
+        return {"pairs": pairs, **regressor_arrays("ridge", estimator[1:])}
     if name == "tree":
         return forest_arrays([estimator])
     if name == "extra_trees":
@@ -154,6 +173,8 @@ def predict_arrays(name: str, arrays: dict[str, np.ndarray], X: np.ndarray) -> n
     if name == "ridge":
         z = (X - arrays["mean"]) / arrays["scale"]
         return z @ arrays["coef"].T + arrays["intercept"]
+    if name == "ridge_pairs":
+        return predict_arrays("ridge", arrays, pair_products(X, arrays["pairs"]))
     if name in ("tree", "extra_trees"):
         leaves = forest_leaf_values(arrays, X)
         acc = np.zeros(leaves.shape[1:])
@@ -174,5 +195,5 @@ def predict_arrays(name: str, arrays: dict[str, np.ndarray], X: np.ndarray) -> n
     raise ValueError(f"no array form of the regressor {name!r}")
 
 
-__all__ = ["FOREST_KEYS", "forest_arrays", "forest_leaf_values", "predict_arrays",
-           "regressor_arrays"]
+__all__ = ["FOREST_KEYS", "forest_arrays", "forest_leaf_values", "pair_products",
+           "predict_arrays", "regressor_arrays"]

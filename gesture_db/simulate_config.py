@@ -63,6 +63,9 @@ class Performer:
         sustained notes inside a run tilt with it.
     accent : float
         Relative extra force on the first note of a slur or a run.
+    phrase_arch : float
+        Relative arch of velocity and force over a run of three notes or more: times
+        ``1 + phrase_arch (sin(pi place) - 0.5)``, fullest in the middle.
     """
 
     name: str
@@ -84,6 +87,7 @@ class Performer:
     finger_lead: float
     crescendo: float
     accent: float
+    phrase_arch: float
 
 
 _FIELDS = tuple(f.name for f in fields(Performer) if f.name != "name")

@@ -38,3 +38,22 @@ def test_few_notes_still_invertible():
     assert model.feature_dim <= 2
     d = model.mahalanobis(model.transform(rng.normal(size=(5, 27))))
     assert np.all(np.isfinite(d))
+
+
+def test_block_floor_keeps_a_near_constant_entry_out_of_the_features():
+    """Without the floor, an entry that barely varies (the speed at a bow change) is blown
+    up to unit variance and becomes a feature of its own; with it, the features follow the
+    entries that carry the note's level."""
+    rng = np.random.default_rng(3)
+    level = rng.normal(size=(400, 1))
+    loud = level * [1.0, 0.9, 1.1] + 0.05 * rng.normal(size=(400, 3))  # a block's values
+    edge = 0.01 * rng.normal(size=(400, 1))  # same unit, ~1 % of the level's spread
+    p = np.hstack([loud, edge])
+    blocks = np.array([0, 0, 0, 0])
+    plain = fit_group_model(p, n_components=2)
+    floored = fit_group_model(p, n_components=2, blocks=blocks, floor_share=0.25)
+    # the second feature: the edge entry alone without the floor, the level's residue with
+    assert abs(plain.components[1, 3]) > 0.9
+    assert abs(floored.components[1, 3]) < 0.5
+    assert floored.param_scale[3] == 0.25 * p[:, :3].std(axis=0).max()
+    np.testing.assert_allclose(floored.param_scale[:3], p[:, :3].std(axis=0))
