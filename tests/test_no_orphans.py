@@ -47,11 +47,28 @@ def _alive(pid: int) -> bool:
     return got is not None and got[0] != "Z"
 
 
+def _as_a_terminal_starts_it() -> None:
+    """In the child before exec: Ctrl-C at its default, as a shell starts a foreground job.
+
+    An ignored SIGINT is inherited through exec, and Python then installs no handler of its
+    own; the test runner's worker (pytest-xdist under ``make test``) may be such a process.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(argv: list[str], tmp_path: Path) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.Popen([sys.executable, "-m", "pipelines.cli.main", *argv], cwd=tmp_path,
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=_as_a_terminal_starts_it)
+
+
+def _ignores_sigint(pid: int) -> bool:
+    """Whether process ``pid`` ignores SIGINT (its /proc status SigIgn mask)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("SigIgn:"):
+            return bool(int(line.split()[1], 16) & (1 << (signal.SIGINT - 1)))
+    return False
 
 
 def _workers_of(proc: subprocess.Popen, want: int, timeout: float = 90.0,
@@ -110,6 +127,7 @@ def test_ctrl_c_stops_the_workers(takes, tmp_path):
     proc = _build_db(takes, tmp_path)
     workers = _workers_of(proc, 2, settle=1.0)  # the pool is working on the 20 takes
     assert proc.poll() is None, "the build ended before it could be interrupted"
+    assert not _ignores_sigint(proc.pid), "the run was started with SIGINT ignored"
     os.killpg(proc.pid, signal.SIGINT)  # what the terminal sends on Ctrl-C
     code = proc.wait(timeout=30)
     err = proc.stderr.read().decode()
