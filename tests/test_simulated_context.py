@@ -25,7 +25,17 @@ def _held(path):
     return ann, force, beta
 
 
-def test_string_crossing_lightens_and_slow_notes_play_nearer_the_bridge(tmp_path):
+#: The effects under test, switched on (the shipped simulate.toml keeps them off).
+EFFECTS = {"crossing_lift": 0.15, "crossing_slow": 0.1, "beta_speed_exponent": 0.6}
+
+
+def test_string_crossing_lightens_and_slow_notes_play_nearer_the_bridge(tmp_path,
+                                                                        monkeypatch):
+    import gesture_db.playing as playing
+
+    shipped = simulator_config()
+    config = {**shipped, "magnitudes": {**shipped["magnitudes"], **EFFECTS}}
+    monkeypatch.setattr(playing, "simulator_config", lambda: config)
     perf = replace(PERFORMERS[0], name="plain", crescendo=0.0, accent=0.0, phrase_arch=0.0,
                    variability=0.02)
     path = simulate_recordings(900, 1, tmp_path, seed=3, notes_per_take=900,
@@ -38,7 +48,7 @@ def test_string_crossing_lightens_and_slow_notes_play_nearer_the_bridge(tmp_path
         (ann["slur_position"].to_numpy() == "iso")
     _, table_force, table_beta = dynamics_table("violinist").at(ann["dynamic"].to_numpy())
     rel = np.log(force / table_force)
-    lift = simulator_config()["magnitudes"]["crossing_lift"]
+    lift = EFFECTS["crossing_lift"]
     before, other = rel[plain & crossing], rel[plain & ~crossing]
     assert before.size >= 4 and other.size >= 20
     # force of the note before a crossing: log(1 - lift) below the others (+- a few %)
