@@ -126,7 +126,7 @@ def stroke_acceleration(t: np.ndarray, target: np.ndarray, bow: dict[str, Any]) 
     if length <= 0.0 or not target.size:
         return base
     needed = float(np.max(target)) / (SHORT_STROKE_RAMP * length)
-    return float(min(max(base, needed), max(base, bow.get("short_stroke_acceleration", base))))
+    return float(min(max(base, needed), max(base, bow["short_stroke_acceleration"])))
 
 
 def _dynamic_at(e: Event, t: np.ndarray) -> np.ndarray:

@@ -101,12 +101,10 @@ def correct_by_ear(events: list, instrument: str, config: dict[str, Any],
     """
     if not config["intonation"]["by_ear"]:
         return 0
-    from pipelines.perform.loudness import calibration_key
+    from pipelines.perform.loudness import warn_if_stale
 
     table = load_pitch_calibration()
-    if warnings is not None and set(table["key"]) != {calibration_key(config)}:
-        warnings.append("the pitch calibration was measured with other string physics or "
-                        "bow lanes (run bench/calibrate_pitch.py)")
+    warn_if_stale(table, config, "pitch", "calibrate_pitch.py", warnings)
     cal = PitchCalibration(table, instrument)
     moved = 0
     for e in events:

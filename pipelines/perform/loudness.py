@@ -60,6 +60,19 @@ def calibration_key(config: dict[str, Any]) -> str:
     return h.hexdigest()[:16]
 
 
+def warn_if_stale(table: pd.DataFrame, config: dict[str, Any], what: str, script: str,
+                  warnings: list[str] | None) -> None:
+    """Note in ``warnings`` that a calibration table is stale for ``config``.
+
+    Stale: its ``key`` column is not ``config``'s :func:`calibration_key` (other string
+    physics or bow lanes). ``what`` names the calibration, ``script`` the bench that
+    re-measures it.
+    """
+    if warnings is not None and set(table["key"]) != {calibration_key(config)}:
+        warnings.append(f"the {what} calibration was measured with other string physics or "
+                        f"bow lanes (run bench/{script})")
+
+
 @lru_cache(maxsize=4)
 def _read(path: str) -> pd.DataFrame:
     from data_schemas.io import read_frame
@@ -255,9 +268,7 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     if not cfg["enabled"]:
         return 0
     table = load_calibration()
-    if warnings is not None and set(table["key"]) != {calibration_key(config)}:
-        warnings.append("the loudness calibration was measured with other string physics or "
-                        "bow lanes (run bench/calibrate_loudness.py)")
+    warn_if_stale(table, config, "loudness", "calibrate_loudness.py", warnings)
     cal = Calibration(table, instrument)
     short = 0
     for e in events:
