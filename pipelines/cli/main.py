@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
@@ -34,6 +35,8 @@ COMMAND_MODULES = (
 )
 
 EXIT_USAGE = 2
+#: Exit code after Ctrl-C (128 + SIGINT), as shells report it.
+EXIT_INTERRUPTED = 130
 
 
 class _Version(argparse.Action):
@@ -87,8 +90,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     except KeyboardInterrupt:
         print(f"arco {args.command}: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
+
+
+def run() -> None:
+    """The ``arco`` command: exit with :func:`main`'s code.
+
+    After Ctrl-C the process ends at once (``os._exit``) instead of through the interpreter's
+    shutdown: a pool worker terminated in the middle of sending a result leaves
+    ``concurrent.futures``' manager thread blocked on the result pipe, and the shutdown joins
+    that thread forever (seen on 1 ``build-db`` in 8, tests/test_no_orphans.py). Outputs are
+    safe: every table is written to a temporary file and renamed.
+    """
+    code = main()
+    if code == EXIT_INTERRUPTED:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    run()
