@@ -44,10 +44,12 @@ def test_render_actions_and_plot(score, tmp_path, capsys):
 
 
 def test_config_override(score, tmp_path, capsys):
-    cfg = tmp_path / "rules.toml"
-    cfg.write_text("[instruments.violin]\nforce_scale = 2.0\n")
+    # rehearsal would hear the louder notes and bow them softer: off in both
+    plain, cfg = tmp_path / "plain.toml", tmp_path / "rules.toml"
+    plain.write_text("[loudness]\nrehearsals = 0\n")
+    cfg.write_text("[loudness]\nrehearsals = 0\n[instruments.violin]\nforce_scale = 2.0\n")
     outs = []
-    for extra in ((), ("--config", cfg)):
+    for extra in (("--config", plain), ("--config", cfg)):
         path = tmp_path / f"a{len(outs)}.parquet"
         code, _, err = run(capsys, "render", score, "--method", "rules", "--actions", path,
                            "--quiet", *extra)

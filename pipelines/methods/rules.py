@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.errors import ParameterError
+from pipelines.methods.rehearsal import rehearse
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.perform.rules import fermata_warp, perform_part
 from pipelines.perform.timing import player_warp
@@ -46,6 +47,8 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
         Show a progress bar (default: when stderr is a terminal).
     engine : str
         Synthesis engine that plays (:func:`synth.engines.engine_names`; default ``modal``).
+        With ``[loudness] rehearsals`` above 0 each part is played, heard and played again
+        (:func:`pipelines.methods.rehearsal.rehearse`), also when ``audio`` is False.
 
     Returns
     -------
@@ -59,25 +62,49 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
         raise ParameterError(f"sample_rate={sample_rate} must be > 0")
     rng = np.random.default_rng(seed)
     warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
-    synth = _synth() if audio else None
+    rehearsing = config["loudness"]["enabled"] and config["loudness"]["rehearsals"] > 0
+    synth = _synth() if audio or rehearsing else None
     show = sys.stderr.isatty() if progress is None else progress
     result = RenderResult(None, sample_rate)
     for index in tqdm(parts, desc="render", unit="part", disable=not show):
         part = notes[notes["part_index"] == index]
         name = instrument or str(part["instrument"].iloc[0])
         timed = player_warp(warp, notes, index, seed=seed) if len(parts) > 1 else warp
-        perf = perform_part(part, config, instrument=name, skill=skill, rng=rng, warp=timed,
-                            transpose_octaves=transpose_octaves)
-        rendered = PartRender(index, str(part["part_name"].iloc[0]), name, perf)
+        listen = None
         if synth is not None:
-            rendered.audio = np.asarray(
-                synth(perf.actions, instrument=name, engine=engine, sample_rate=sample_rate,
-                      seed=seed, progress=show and len(parts) == 1),
-                dtype=np.float32)
+            def listen(perf, name=name):
+                return np.asarray(synth(perf.actions, instrument=name, engine=engine,
+                                        sample_rate=sample_rate, seed=seed,
+                                        progress=show and len(parts) == 1),
+                                  dtype=np.float32)
+        perf, sound = _play_part(part, config, listen, sample_rate, instrument=name,
+                                 skill=skill, rng=rng, warp=timed,
+                                 transpose_octaves=transpose_octaves)
+        rendered = PartRender(index, str(part["part_name"].iloc[0]), name, perf)
+        if audio:
+            rendered.audio = sound
         result.parts.append(rendered)
-    if synth is not None:
+    if audio:
         result.audio = mix([p.audio for p in result.parts])
     return result
+
+
+def _play_part(part: pd.DataFrame, config: dict[str, Any], listen: Any, sample_rate: int,
+               *, rng: np.random.Generator, **options: Any) -> tuple[Any, np.ndarray | None]:
+    """One part's Performance and, with ``listen``, its audio (rehearsed when configured).
+
+    ``options`` go to :func:`pipelines.perform.rules.perform_part`; every try starts from the
+    same ``rng`` state, so each plays the same jitter.
+    """
+    state = rng.bit_generator.state
+
+    def play(shift: np.ndarray | None):
+        rng.bit_generator.state = state
+        return perform_part(part, config, rng=rng, level_shift=shift, **options)
+
+    if listen is None:
+        return play(None), None
+    return rehearse(play, listen, config, sample_rate)
 
 
 def _synth():

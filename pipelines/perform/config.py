@@ -22,8 +22,11 @@ from data_schemas.errors import ParameterError
 from data_schemas.instruments import INSTRUMENT_NAMES, dynamics_table, instrument_facts, limits
 
 _N_LEVELS = 10
-#: dB a level below pppp (velocity and force scaled together at the pppp lane's beta).
+#: dB a level below pppp or above ffff (velocity and force scaled together at the end lane's
+#: beta).
 QUIET_DB = 3.0
+#: The dynamic scale's last level (ffff).
+TOP_LEVEL = float(_N_LEVELS - 1)
 
 
 @lru_cache(maxsize=1)
@@ -211,6 +214,19 @@ def _validate_loudness(config: dict[str, Any], source: str) -> None:
     if not _is_number(cfg["below_pppp"]) or not 0.0 <= cfg["below_pppp"] <= 5.0:
         raise ParameterError(f"{source}: loudness.below_pppp={cfg['below_pppp']!r} must be in "
                              "[0, 5] levels")
+    if not _is_number(cfg["above_ffff"]) or not 0.0 <= cfg["above_ffff"] <= 2.0:
+        raise ParameterError(f"{source}: loudness.above_ffff={cfg['above_ffff']!r} must be in "
+                             "[0, 2] levels")
+    rehearsals = cfg["rehearsals"]
+    if isinstance(rehearsals, bool) or not isinstance(rehearsals, int) or \
+            not 0 <= rehearsals <= 5:
+        raise ParameterError(f"{source}: loudness.rehearsals={rehearsals!r} must be a whole "
+                             "number in [0, 5]")
+    for key, top, unit in (("rehearsal_tolerance_db", 6.0, "dB"),
+                           ("rehearsal_max_shift", 9.0, "levels")):
+        if not _is_number(cfg[key]) or not 0.0 < cfg[key] <= top:
+            raise ParameterError(f"{source}: loudness.{key}={cfg[key]!r} must be in "
+                                 f"(0, {top:g}] {unit}")
 
 
 _VIBRATO_POSITIVE = ("rate", "onset_delay", "fade_in", "min_duration")
@@ -284,7 +300,8 @@ def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.nda
         loudness needs it) the pppp lane's beta with velocity and force both scaled down by
         :data:`QUIET_DB` dB a level: the Helmholtz window's edges (F_min ~ v / beta^2,
         F_max ~ v / beta) scale with the velocity, so the note stays as far inside it as at
-        pppp, and its amplitude (~ v / beta) falls by the same dB.
+        pppp, and its amplitude (~ v / beta) falls by the same dB. Above 9 (louder than
+        ffff) the same law scales the ffff lane up.
 
     Returns
     -------
@@ -297,10 +314,14 @@ def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.nda
     [0.08, 0.0401]
     >>> float(dynamic_table(cfg, "beta", np.array([-2.0]))[0])
     0.2
+    >>> ratio = dynamic_table(cfg, "force", np.array([10.0, 9.0]))
+    >>> round(float(ratio[0] / ratio[1]), 3)       # 3 dB a level above ffff
+    1.413
     """
     table = np.asarray(config["dynamics"][key], dtype=np.float64)
     level = np.asarray(level, dtype=np.float64)
     out = np.interp(level, np.arange(table.size), table)
     if key in ("velocity", "force"):
-        out = out * 10.0 ** (QUIET_DB * np.minimum(level, 0.0) / 20.0)
+        beyond = np.minimum(level, 0.0) + np.maximum(level - TOP_LEVEL, 0.0)
+        out = out * 10.0 ** (QUIET_DB * beyond / 20.0)
     return out

@@ -23,7 +23,9 @@ class Event:
     only touches its string at the ``node``-th harmonic's node (``semitones`` is that point,
     :mod:`pipelines.perform.harmonics`); ``node`` without ``touch``: an artificial
     harmonic, the finger stops the string at ``semitones`` and a second one touches it at
-    1/``node`` of the stopped length.
+    1/``node`` of the stopped length. ``goal_lufs``: the loudness (LUFS) its marked dynamic
+    asks for (:func:`pipelines.perform.loudness.even_out`; NaN where loudness is not evened
+    out: pizzicato, harmonics, evening out disabled).
     """
 
     rows: list[int]
@@ -56,6 +58,7 @@ class Event:
     ornament: Ornament | None = None
     touch: bool = False
     node: int = 0
+    goal_lufs: float = np.nan
 
 
 @dataclass
@@ -69,7 +72,7 @@ class Performance:
     events : pandas.DataFrame
         One row per played event: ``t0``, ``played_end``, ``end`` (s), ``label`` (note
         names), ``direction`` (+1 down, -1 up, 0 pizz), ``string``, ``dynamic``,
-        ``measure``, ``n_strings``, ``run_position`` (:func:`events_table`).
+        ``measure``, ``n_strings``, ``run_position``, ``goal_lufs`` (:func:`events_table`).
     warnings : list of str
         Things the rules could not do as written (rolled chords, squeezed strokes).
     """
@@ -94,7 +97,8 @@ def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         ``t0``, ``played_end``, ``end`` (s), ``label``, ``direction`` (+1 down, -1 up,
         0 pizz), ``string`` (the top one), ``dynamic``, ``measure`` (of the event's first
-        note), ``n_strings`` (2 or more: a double stop or chord), ``run_position``.
+        note), ``n_strings`` (2 or more: a double stop or chord), ``run_position``,
+        ``goal_lufs`` (LUFS, :attr:`Event.goal_lufs`).
 
     Examples
     --------
@@ -112,4 +116,5 @@ def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
         "string": [e.strings[-1] for e in events], "dynamic": [e.dynamic for e in events],
         "measure": [int(measure[e.rows[0]]) for e in events],
         "n_strings": [len(e.strings) for e in events],
-        "run_position": [e.run_position for e in events]})
+        "run_position": [e.run_position for e in events],
+        "goal_lufs": [e.goal_lufs for e in events]})

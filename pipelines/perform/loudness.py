@@ -11,9 +11,10 @@ where it booms -- to the level whose calibrated loudness (at the note's own posi
 and intonation, :class:`Calibration`) is the dynamic's target: ``[loudness] mf`` LUFS plus
 ``[loudness] level_db`` of the marked level, avoiding levels where the note spoke one bow
 direction only. The lanes stay in each string's playable window (force in multiples of the
-string's reference force), and so does their extension below pppp (``below_pppp`` levels:
+string's reference force), and so do their extensions below pppp (``below_pppp`` levels:
 pppp's beta, velocity and force scaled down together,
-:func:`pipelines.perform.config.dynamic_table`); where the lanes end or ``max_shift``
+:func:`pipelines.perform.config.dynamic_table`) and above ffff (``above_ffff``, the ffff
+lane scaled up for the weakest notes of a loud passage); where the lanes end or ``max_shift``
 levels do not reach the target, the event is played as near as possible and counted in a
 warning.
 """
@@ -28,7 +29,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from pipelines.perform.config import QUIET_DB
+from pipelines.perform.config import QUIET_DB, TOP_LEVEL
 from pipelines.perform.events import Event
 
 TABLE_PATH = Path(__file__).with_name("loudness_calibration.parquet")
@@ -191,21 +192,43 @@ class Calibration:
         shift = float(np.interp(semitone - positions[i], [-PITCH_OFFSET, 0.0, PITCH_OFFSET],
                                 self.pitch[string][i]))
         level = np.asarray(level, np.float64)
-        quiet = QUIET_DB * np.minimum(level, 0.0)  # below pppp (config.dynamic_table)
-        return np.interp(level, levels, surface[i]) + shift + quiet
+        # below pppp and above ffff the end lane scaled (config.dynamic_table)
+        beyond = QUIET_DB * (np.minimum(level, 0.0) + np.maximum(level - TOP_LEVEL, 0.0))
+        return np.interp(level, levels, surface[i]) + shift + beyond
 
     def speaks(self, string: int, semitone: float, level: np.ndarray) -> np.ndarray:
         """Whether the calibration's note spoke both ways at the levels around ``level``.
 
         False within a level of a fragile calibrated level. Below pppp (not calibrated both
-        ways) a note counts as speaking: the scaled lane keeps pppp's place in the window.
+        ways) a note counts as speaking: the scaled lane keeps pppp's place in the window;
+        above ffff it speaks as ffff does.
         """
         positions, levels, _ = self.grid[string]
         bad = levels[self.fragile[string][int(np.argmin(np.abs(positions -
                                                                  np.round(semitone))))]]
         level = np.asarray(level, np.float64)
-        near = np.any(np.abs(level[:, None] - bad[None, :]) < 1.0, axis=1)
+        kept = np.minimum(level, TOP_LEVEL)
+        near = np.any(np.abs(kept[:, None] - bad[None, :]) < 1.0, axis=1)
         return ~near | (level < 0.0)
+
+
+def lane_slope(config: dict[str, Any], level: np.ndarray) -> np.ndarray:
+    """Loudness a level of the lanes adds at ``level``, dB: the target curve's slope.
+
+    ``[loudness] level_db`` is the lanes' measured median spread; beyond pppp and ffff the
+    scaled lanes add :data:`~pipelines.perform.config.QUIET_DB`. At least 1 dB a level.
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import load_config
+    >>> lane_slope(load_config(), np.array([-1.0, 5.0, 9.5])).round(2).tolist()
+    [3.0, 3.15, 3.0]
+    """
+    curve = np.asarray(config["loudness"]["level_db"], np.float64)
+    level = np.asarray(level, np.float64)
+    slope = np.interp(level, LEVELS, np.gradient(curve, LEVELS))
+    slope = np.where((level < 0.0) | (level > TOP_LEVEL), QUIET_DB, slope)
+    return np.maximum(slope, 1.0)
 
 
 def target(config: dict[str, Any], level: float) -> float:
@@ -216,18 +239,19 @@ def target(config: dict[str, Any], level: float) -> float:
 
 def bowed_level(cal: Calibration, strings: list[int], semitones: list[float],
                 goal: float, max_shift: float, marked: float,
-                below: float = 0.0) -> tuple[float, bool]:
+                below: float = 0.0, above: float = 0.0) -> tuple[float, bool]:
     """The lane level whose calibrated loudness on these strings is ``goal`` LUFS.
 
-    Levels run from ``-below`` (softer than pppp) to 9, at most ``max_shift`` from
-    ``marked``. Returns the level and whether it fell short (lanes' end or ``max_shift``).
-    Where the calibrated curve crosses the goal more than once (a curve that is not monotonic), the
-    crossing nearest the marked level wins; where it does not cross, the nearest level.
-    Levels within one of a level where the calibration's note spoke one bow direction only
-    (:meth:`Calibration.speaks`) are avoided, as a player avoids a bowing that does not
-    speak.
+    Levels run from ``-below`` (softer than pppp) to ``9 + above`` (louder than ffff), at
+    most ``max_shift`` from ``marked``. Returns the level and whether it fell short (lanes'
+    end or ``max_shift``). Where the calibrated curve crosses the goal more than once (a
+    curve that is not monotonic), the crossing nearest the marked level wins; where it does
+    not cross, the nearest level. Levels within one of a level where the calibration's note
+    spoke one bow direction only (:meth:`Calibration.speaks`) are avoided, as a player
+    avoids a bowing that does not speak.
     """
-    grid = np.linspace(max(-below, marked - max_shift), min(9.0, marked + max_shift), 241)
+    grid = np.linspace(max(-below, marked - max_shift), min(TOP_LEVEL + above,
+                                                             marked + max_shift), 241)
     power = np.mean([10.0 ** (cal.loudness(s, q, grid) / 10.0)
                      for s, q in zip(strings, semitones, strict=True)], axis=0)
     diff = 10.0 * np.log10(power) - goal
@@ -244,20 +268,26 @@ def bowed_level(cal: Calibration, strings: list[int], semitones: list[float],
 
 
 def even_out(events: list[Event], instrument: str, config: dict[str, Any],
-             warnings: list[str] | None = None) -> int:
+             warnings: list[str] | None = None,
+             level_shift: np.ndarray | None = None) -> int:
     """Move each bowed event's dynamic along the lanes to its marked level's loudness.
 
     Parameters
     ----------
     events : list of Event
         Events of one part (changed in place: ``dynamic`` and ``dynamic_next`` become the
-        bowed levels; pizzicato events and natural harmonics are left alone).
+        bowed levels, ``goal_lufs`` the marked level's loudness; pizzicato events and
+        natural harmonics are left alone).
     instrument : str
     config : dict
         Rules configuration (``[loudness]``: ``enabled``, ``mf``, ``level_db``,
-        ``max_shift``, ``below_pppp``).
+        ``max_shift``, ``below_pppp``, ``above_ffff``).
     warnings : list of str, optional
         Receives a note when some events could not reach their target loudness.
+    level_shift : np.ndarray [shape=(len(events),)], levels, optional
+        Added to each event's calibrated levels (within the lanes and their extensions):
+        what rehearsal heard the calibration miss (:mod:`pipelines.methods.rehearsal`).
+        ``goal_lufs`` stays the marked level's loudness.
 
     Returns
     -------
@@ -270,17 +300,24 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     table = load_calibration()
     warn_if_stale(table, config, "loudness", "calibrate_loudness.py", warnings)
     cal = Calibration(table, instrument)
+    shift = np.zeros(len(events)) if level_shift is None else np.asarray(level_shift, float)
+    reach = (-cfg["below_pppp"], TOP_LEVEL + cfg["above_ffff"])
     short = 0
-    for e in events:
+    for e, extra in zip(events, shift, strict=True):
         if e.pizz or e.node:  # calibrated on stopped notes: harmonics keep their marking
             continue
         marked, marked_next = e.dynamic, e.dynamic_next
-        e.dynamic, miss = bowed_level(cal, e.strings, e.semitones, target(config, marked),
-                                      cfg["max_shift"], marked, cfg["below_pppp"])
+        goals = [target(config, marked)] + ([] if marked_next is None
+                                            else [target(config, marked_next)])
+        e.goal_lufs = float(np.mean(goals))
+        level, miss = bowed_level(cal, e.strings, e.semitones, goals[0], cfg["max_shift"],
+                                  marked, cfg["below_pppp"], cfg["above_ffff"])
+        e.dynamic = float(np.clip(level + extra, *reach))
         if marked_next is not None:
-            e.dynamic_next, miss_next = bowed_level(
-                cal, e.strings, e.semitones, target(config, marked_next), cfg["max_shift"],
-                marked_next, cfg["below_pppp"])
+            level, miss_next = bowed_level(cal, e.strings, e.semitones, goals[1],
+                                           cfg["max_shift"], marked_next, cfg["below_pppp"],
+                                           cfg["above_ffff"])
+            e.dynamic_next = float(np.clip(level + extra, *reach))
             miss = miss or miss_next
         short += miss
     if short and warnings is not None:

@@ -347,7 +347,8 @@ def prepare_events(notes: pd.DataFrame, config: dict[str, Any], *,
 def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str | None = None,
                  skill: int = 3, rng: np.random.Generator | None = None,
                  warp: Callable[[np.ndarray], np.ndarray] | None = None,
-                 transpose_octaves: bool = False) -> Performance:
+                 transpose_octaves: bool = False,
+                 level_shift: np.ndarray | None = None) -> Performance:
     """Apply the performance rules to one part.
 
     Parameters
@@ -366,6 +367,9 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         Time map shared by all parts (fermatas); default: :func:`fermata_warp` of ``notes``.
     transpose_octaves : bool
         Fold out-of-range notes by octaves instead of failing.
+    level_shift : np.ndarray [shape=(events,)], levels, optional
+        Added to each event's evened-out dynamic level (what rehearsal heard,
+        :mod:`pipelines.methods.rehearsal`); the events are those this call plays, in order.
 
     Returns
     -------
@@ -385,7 +389,8 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         notes, config, instrument=instrument, skill=skill, rng=rng, warp=warp,
         transpose_octaves=transpose_octaves, warnings=warnings)
     inst_cfg = config["instruments"][name]
-    even_out(events, name, config, warnings)  # the marked dynamic -> the bowed lane level
+    # the marked dynamic -> the bowed lane level (plus what rehearsal heard)
+    even_out(events, name, config, warnings, level_shift)
     correct_by_ear(events, name, config, warnings)  # fingers where the notes sound in tune
     if strings["rolled"].any():
         warnings.append(f"part {notes['part_name'].iloc[0]!r}: {int(strings['rolled'].sum())} "
