@@ -2,7 +2,7 @@
 
 - ``scale``: per instrument, a chromatic scale of two octaves up from the lowest open string
   (0.5 s notes, 0.1 s apart, one MIDI velocity: 49 = p, 80 = mf, 96 = f) played by the rules
-  (seed 0); each note's loudness (ungated BS.1770 from 30 ms after its start to its played
+  (``--seed``, 0); each note's loudness (ungated BS.1770 from 30 ms after its start to its played
   end, :func:`pipelines.reports.loudness.note_loudness`). Figures: the largest and the median
   difference between neighbouring notes, the median per dynamic, the spread of the median
   between instruments at each dynamic, and p to f.
@@ -69,7 +69,7 @@ def scale_notes(instrument: str, velocity: int, workdir: Path) -> pd.DataFrame:
     return read_score(path)
 
 
-def scale_figures(config: dict, workdir: Path) -> dict:
+def scale_figures(config: dict, workdir: Path, seed: int = 0) -> dict:
     from pipelines.methods.rules import render
 
     out: dict = {"per_instrument": {}}
@@ -77,7 +77,7 @@ def scale_figures(config: dict, workdir: Path) -> dict:
     for inst in PROGRAMS:
         fig: dict = {}
         for dyn, vel in VELOCITIES.items():
-            res = render(scale_notes(inst, vel, workdir), config, parts=[0], seed=0,
+            res = render(scale_notes(inst, vel, workdir), config, parts=[0], seed=seed,
                          sample_rate=SAMPLE_RATE, progress=False)
             part = res.parts[0]
             level = part_loudness(part.audio, part.performance.events)
@@ -109,14 +109,14 @@ def marked_levels(notes: pd.DataFrame, events: pd.DataFrame) -> np.ndarray:
     return np.round(notes["dynamic"].to_numpy()[order][idx])
 
 
-def quartet_figure(path: Path, config: dict, measures: int) -> dict:
+def quartet_figure(path: Path, config: dict, measures: int, seed: int = 0) -> dict:
     from pipelines.methods.rules import render
     from pipelines.score import read_score
     from pipelines.score.select import select_measures
 
     notes = select_measures(read_score(path), 1, measures)
     parts = sorted(int(p) for p in notes["part_index"].unique())
-    res = render(notes, config, parts=parts, seed=0, sample_rate=SAMPLE_RATE,
+    res = render(notes, config, parts=parts, seed=seed, sample_rate=SAMPLE_RATE,
                  transpose_octaves=True, progress=False)
     rows = []
     for part in res.parts:
@@ -139,13 +139,14 @@ def quartet_figure(path: Path, config: dict, measures: int) -> dict:
             "part_median_lufs": [float(per_part.get(p, np.nan)) for p in parts]}
 
 
-def quartet_figures(config: dict, folder: Path, measures: int, limit: int | None) -> dict:
+def quartet_figures(config: dict, folder: Path, measures: int, limit: int | None,
+                    seed: int = 0) -> dict:
     files = sorted(folder.glob("*.mxl"))[:limit]
     out: dict = {"per_quartet": {}}
     for f in files:
         t0 = time.perf_counter()
         try:
-            out["per_quartet"][f.stem] = fig = quartet_figure(f, config, measures)
+            out["per_quartet"][f.stem] = fig = quartet_figure(f, config, measures, seed)
         except Exception as exc:  # a bench reports what failed and goes on
             out["per_quartet"][f.stem] = {"error": f"{type(exc).__name__}: {exc}"}
             say(f"  {f.stem[:40]}: {type(exc).__name__}: {exc}")
@@ -171,18 +172,20 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--measures", type=int, default=6, help="measures from the start (6)")
     p.add_argument("--skip-quartets", action="store_true", help="only the scales")
     p.add_argument("--rules-config", metavar="TOML", help="rules settings to merge")
+    p.add_argument("--seed", type=int, default=0, help="seed of the rules' renders (0)")
     args = p.parse_args(argv)
     config = load_config(args.rules_config)
     t0 = time.perf_counter()
     result: dict = {"settings": {"sample_rate": SAMPLE_RATE, "measures": args.measures,
+                                 "seed": args.seed,
                                  "loudness": "BS.1770 ungated per note, mono stem"}}
     with tempfile.TemporaryDirectory() as tmp:
         say("scales ...")
-        result["scale"] = scale_figures(config, Path(tmp))
+        result["scale"] = scale_figures(config, Path(tmp), args.seed)
     if not args.skip_quartets:
         say("quartets ...")
         result["quartets"] = quartet_figures(config, Path(args.quartets), args.measures,
-                                             args.limit)
+                                             args.limit, args.seed)
     result["elapsed_s"] = time.perf_counter() - t0
     text = json.dumps(clean(result))
     print(text if args.json else json.dumps(clean(result), indent=1))
