@@ -84,8 +84,9 @@ def next_shift(tried: np.ndarray, missed: np.ndarray, slope: np.ndarray, *,
     np.ndarray [shape=(events,)], levels
         From each note's nearest try, ``shift - missed / slope``; after two tries the slope
         is the secant through the note's two nearest, bounded to :data:`SLOPE_RANGE` times
-        the expected one, except where the two disagree in sign (the note grew softer as it
-        was bowed harder: a fragile bowing, from which the secant would overshoot).
+        the expected one. Where the two disagree in sign (the note grew softer as it was
+        bowed harder: a fragile bowing) the note stays at its nearest try, as a player goes
+        back to the bowing that spoke.
     """
     score = np.where(np.isfinite(missed), np.abs(missed), np.inf)
     order = np.argsort(score, axis=0, kind="stable")
@@ -98,9 +99,13 @@ def next_shift(tried: np.ndarray, missed: np.ndarray, slope: np.ndarray, *,
         with np.errstate(invalid="ignore", divide="ignore"):
             secant = (miss - missed[order[1], cols]) / np.where(moved, step, 1.0)
         usable = moved & np.isfinite(secant) & (secant > 0.0)
+        fragile = moved & np.isfinite(secant) & (secant <= 0.0)
         bounded = np.clip(secant, SLOPE_RANGE[0] * slope, SLOPE_RANGE[1] * slope)
         slope = np.where(usable, bounded, slope)
-    change = np.where(np.isfinite(miss) & (np.abs(miss) > tolerance), miss / slope, 0.0)
+    else:
+        fragile = np.zeros(shift.shape, bool)
+    step_needed = np.isfinite(miss) & (np.abs(miss) > tolerance) & ~fragile
+    change = np.where(step_needed, miss / slope, 0.0)
     return np.clip(shift - change, -largest, largest)
 
 
