@@ -93,6 +93,7 @@ def next_shift(tried: np.ndarray, missed: np.ndarray, slope: np.ndarray, *,
     cols = np.arange(tried.shape[1])
     shift, miss = tried[order[0], cols], missed[order[0], cols]
     slope = np.asarray(slope, np.float64)
+    fragile = np.zeros(shift.shape, bool)
     if tried.shape[0] >= 2:
         step = shift - tried[order[1], cols]
         moved = np.abs(step) > 0.02
@@ -102,8 +103,6 @@ def next_shift(tried: np.ndarray, missed: np.ndarray, slope: np.ndarray, *,
         fragile = moved & np.isfinite(secant) & (secant <= 0.0)
         bounded = np.clip(secant, SLOPE_RANGE[0] * slope, SLOPE_RANGE[1] * slope)
         slope = np.where(usable, bounded, slope)
-    else:
-        fragile = np.zeros(shift.shape, bool)
     step_needed = np.isfinite(miss) & (np.abs(miss) > tolerance) & ~fragile
     change = np.where(step_needed, miss / slope, 0.0)
     return np.clip(shift - change, -largest, largest)

@@ -286,6 +286,18 @@ def _validate_ornaments(config: dict[str, Any], source: str) -> None:
                              f"is too coarse for trills of {orn['trill_max_rate']} notes/s")
 
 
+def beyond_lanes(level: np.ndarray) -> np.ndarray:
+    """Levels beyond the lanes' table: below pppp (negative), above ffff (positive), else 0.
+
+    Examples
+    --------
+    >>> beyond_lanes(np.array([-2.0, 4.0, 9.5])).tolist()
+    [-2.0, 0.0, 0.5]
+    """
+    level = np.asarray(level, dtype=np.float64)
+    return np.minimum(level, 0.0) + np.maximum(level - TOP_LEVEL, 0.0)
+
+
 def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.ndarray:
     """Interpolate a per-dynamic table at fractional levels.
 
@@ -322,6 +334,5 @@ def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.nda
     level = np.asarray(level, dtype=np.float64)
     out = np.interp(level, np.arange(table.size), table)
     if key in ("velocity", "force"):
-        beyond = np.minimum(level, 0.0) + np.maximum(level - TOP_LEVEL, 0.0)
-        out = out * 10.0 ** (QUIET_DB * beyond / 20.0)
+        out = out * 10.0 ** (QUIET_DB * beyond_lanes(level) / 20.0)
     return out

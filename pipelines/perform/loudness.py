@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from pipelines.perform.config import QUIET_DB, TOP_LEVEL
+from pipelines.perform.config import QUIET_DB, TOP_LEVEL, beyond_lanes
 from pipelines.perform.events import Event
 
 TABLE_PATH = Path(__file__).with_name("loudness_calibration.parquet")
@@ -193,8 +193,7 @@ class Calibration:
                                 self.pitch[string][i]))
         level = np.asarray(level, np.float64)
         # below pppp and above ffff the end lane scaled (config.dynamic_table)
-        beyond = QUIET_DB * (np.minimum(level, 0.0) + np.maximum(level - TOP_LEVEL, 0.0))
-        return np.interp(level, levels, surface[i]) + shift + beyond
+        return np.interp(level, levels, surface[i]) + shift + QUIET_DB * beyond_lanes(level)
 
     def speaks(self, string: int, semitone: float, level: np.ndarray) -> np.ndarray:
         """Whether the calibration's note spoke both ways at the levels around ``level``.
@@ -227,7 +226,7 @@ def lane_slope(config: dict[str, Any], level: np.ndarray) -> np.ndarray:
     curve = np.asarray(config["loudness"]["level_db"], np.float64)
     level = np.asarray(level, np.float64)
     slope = np.interp(level, LEVELS, np.gradient(curve, LEVELS))
-    slope = np.where((level < 0.0) | (level > TOP_LEVEL), QUIET_DB, slope)
+    slope = np.where(beyond_lanes(level) != 0.0, QUIET_DB, slope)
     return np.maximum(slope, 1.0)
 
 
@@ -306,20 +305,17 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     for e, extra in zip(events, shift, strict=True):
         if e.pizz or e.node:  # calibrated on stopped notes: harmonics keep their marking
             continue
-        marked, marked_next = e.dynamic, e.dynamic_next
-        goals = [target(config, marked)] + ([] if marked_next is None
-                                            else [target(config, marked_next)])
+        marks = [e.dynamic] + ([] if e.dynamic_next is None else [e.dynamic_next])
+        goals = [target(config, mark) for mark in marks]
         e.goal_lufs = float(np.mean(goals))
-        level, miss = bowed_level(cal, e.strings, e.semitones, goals[0], cfg["max_shift"],
-                                  marked, cfg["below_pppp"], cfg["above_ffff"])
-        e.dynamic = float(np.clip(level + extra, *reach))
-        if marked_next is not None:
-            level, miss_next = bowed_level(cal, e.strings, e.semitones, goals[1],
-                                           cfg["max_shift"], marked_next, cfg["below_pppp"],
-                                           cfg["above_ffff"])
-            e.dynamic_next = float(np.clip(level + extra, *reach))
-            miss = miss or miss_next
-        short += miss
+        bowed = [bowed_level(cal, e.strings, e.semitones, goal, cfg["max_shift"], mark,
+                             cfg["below_pppp"], cfg["above_ffff"])
+                 for goal, mark in zip(goals, marks, strict=True)]
+        levels = [float(np.clip(level + extra, *reach)) for level, _ in bowed]
+        e.dynamic = levels[0]
+        if e.dynamic_next is not None:
+            e.dynamic_next = levels[1]
+        short += any(miss for _, miss in bowed)
     if short and warnings is not None:
         warnings.append(f"{short} notes could not be bowed to their dynamic's loudness "
                         "(within 0.5 dB) inside the bow lanes")
