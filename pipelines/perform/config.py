@@ -107,6 +107,9 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
                   "ornament_note": 0.5, "appoggiatura_share": 0.9, "shift_interval": 24.0,
                   "portamento_time": 0.5},
     "harmonics": {"highest_node": 12.0, "min_beta": 0.2, "segment_beta": 4.0, "force": 2.0},
+    "phrasing": {"phrase_length": 600.0, "phrase_min_length": 600.0, "phrase_depth": 30.0,
+                 "turn": 0.95, "max_step_db": 30.0, "even_depth": 1.0, "clear_break": 1.0,
+                 "chord_db": 12.0},
 }
 
 
@@ -184,6 +187,7 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
             raise ParameterError(f"{source}: bow_regions.{key}={value!r} must be in [0, 1]")
     _validate_expression(config, source)
     _validate_loudness(config, source)
+    _validate_phrasing(config, source)
     for key in ("min_beta", "segment_beta", "force"):
         _positive(config, "harmonics", key, source)
     node = config["harmonics"]["highest_node"]
@@ -227,6 +231,20 @@ def _validate_loudness(config: dict[str, Any], source: str) -> None:
         if not _is_number(cfg[key]) or not 0.0 < cfg[key] <= top:
             raise ParameterError(f"{source}: loudness.{key}={cfg[key]!r} must be in "
                                  f"(0, {top:g}] {unit}")
+
+
+def _validate_phrasing(config: dict[str, Any], source: str) -> None:
+    """``[phrasing]``: a switch, positive lengths and step, depths >= 0, turn inside (0, 1)."""
+    cfg = config["phrasing"]
+    if not isinstance(cfg["enabled"], bool):
+        raise ParameterError(f"{source}: phrasing.enabled={cfg['enabled']!r} must be true or "
+                             "false")
+    for key in ("phrase_length", "phrase_min_length", "turn", "max_step_db", "clear_break"):
+        _positive(config, "phrasing", key, source)
+    for key in ("phrase_depth", "chord_db", "even_depth"):
+        value, upper = cfg[key], _upper("phrasing", key)
+        if not _is_number(value) or not 0 <= value <= upper:
+            raise ParameterError(f"{source}: phrasing.{key}={value!r} must be in [0, {upper}]")
 
 
 _VIBRATO_POSITIVE = ("rate", "onset_delay", "fade_in", "min_duration")

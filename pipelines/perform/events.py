@@ -25,7 +25,8 @@ class Event:
     harmonic, the finger stops the string at ``semitones`` and a second one touches it at
     1/``node`` of the stopped length. ``goal_lufs``: the loudness (LUFS) its marked dynamic
     asks for (:func:`pipelines.perform.loudness.even_out`; NaN where loudness is not evened
-    out: pizzicato, harmonics, evening out disabled).
+    out: pizzicato, harmonics, evening out disabled); ``phrase_db``: the phrase dynamics
+    (dB) added to that goal (:mod:`pipelines.perform.phrasing`).
     """
 
     rows: list[int]
@@ -59,6 +60,7 @@ class Event:
     touch: bool = False
     node: int = 0
     goal_lufs: float = np.nan
+    phrase_db: float = 0.0
 
 
 @dataclass
@@ -98,7 +100,8 @@ def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
         ``t0``, ``played_end``, ``end`` (s), ``label``, ``direction`` (+1 down, -1 up,
         0 pizz), ``string`` (the top one), ``dynamic``, ``measure`` (of the event's first
         note), ``n_strings`` (2 or more: a double stop or chord), ``run_position``,
-        ``goal_lufs`` (LUFS, :attr:`Event.goal_lufs`).
+        ``goal_lufs`` (LUFS, :attr:`Event.goal_lufs`), ``phrase_db`` (dB,
+        :attr:`Event.phrase_db`).
 
     Examples
     --------
@@ -117,4 +120,5 @@ def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
         "measure": [int(measure[e.rows[0]]) for e in events],
         "n_strings": [len(e.strings) for e in events],
         "run_position": [e.run_position for e in events],
-        "goal_lufs": [e.goal_lufs for e in events]})
+        "goal_lufs": [e.goal_lufs for e in events],
+        "phrase_db": [e.phrase_db for e in events]})

@@ -236,6 +236,27 @@ def target(config: dict[str, Any], level: float) -> float:
     return float(cfg["mf"] + np.interp(level, LEVELS, np.asarray(cfg["level_db"], float)))
 
 
+def level_of(config: dict[str, Any], goal: float) -> float:
+    """The dynamic level (0..9, beyond at the ends' slopes) whose loudness is ``goal`` LUFS.
+
+    The inverse of :func:`target`; outside pppp..ffff the curve's end slopes continue.
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import default_config
+    >>> cfg = default_config()
+    >>> round(level_of(cfg, target(cfg, 6.5)), 6)
+    6.5
+    """
+    curve = np.asarray(config["loudness"]["level_db"], float)
+    db = goal - config["loudness"]["mf"]
+    if db < curve[0]:
+        return float((db - curve[0]) / max(curve[1] - curve[0], 1e-9))
+    if db > curve[-1]:
+        return float(TOP_LEVEL + (db - curve[-1]) / max(curve[-1] - curve[-2], 1e-9))
+    return float(np.interp(db, curve, LEVELS))
+
+
 def bowed_level(cal: Calibration, strings: list[int], semitones: list[float],
                 goal: float, max_shift: float, marked: float,
                 below: float = 0.0, above: float = 0.0) -> tuple[float, bool]:
@@ -275,8 +296,8 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
     ----------
     events : list of Event
         Events of one part (changed in place: ``dynamic`` and ``dynamic_next`` become the
-        bowed levels, ``goal_lufs`` the marked level's loudness; pizzicato events and
-        natural harmonics are left alone).
+        bowed levels, ``goal_lufs`` the marked level's loudness plus the event's
+        ``phrase_db``; pizzicato events and natural harmonics are left alone).
     instrument : str
     config : dict
         Rules configuration (``[loudness]``: ``enabled``, ``mf``, ``level_db``,
@@ -306,7 +327,9 @@ def even_out(events: list[Event], instrument: str, config: dict[str, Any],
         if e.pizz or e.node:  # calibrated on stopped notes: harmonics keep their marking
             continue
         marks = [e.dynamic] + ([] if e.dynamic_next is None else [e.dynamic_next])
-        goals = [target(config, mark) for mark in marks]
+        goals = [target(config, mark) + e.phrase_db for mark in marks]
+        if e.phrase_db:  # the level the phrase asks for
+            marks = [level_of(config, goal) for goal in goals]
         e.goal_lufs = float(np.mean(goals))
         bowed = [bowed_level(cal, e.strings, e.semitones, goal, cfg["max_shift"], mark,
                              cfg["below_pppp"], cfg["above_ffff"])

@@ -32,6 +32,7 @@ from pipelines.perform.harmonics import place_artificial_harmonics, place_natura
 from pipelines.perform.instruments import choose_strings, fit_range
 from pipelines.perform.loudness import even_out
 from pipelines.perform.ornaments import assign_ornaments, assign_portamenti, time_graces
+from pipelines.perform.phrasing import assign_phrasing
 
 _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
 _MIN_DURATION = 0.005  # s
@@ -389,7 +390,8 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         notes, config, instrument=instrument, skill=skill, rng=rng, warp=warp,
         transpose_octaves=transpose_octaves, warnings=warnings)
     inst_cfg = config["instruments"][name]
-    # the marked dynamic -> the bowed lane level (plus what rehearsal heard)
+    assign_phrasing(events, notes, config)
+    # the marked dynamic (+ phrasing) -> the bowed lane level (plus what rehearsal heard)
     even_out(events, name, config, warnings, level_shift)
     correct_by_ear(events, name, config, warnings)  # fingers where the notes sound in tune
     if strings["rolled"].any():
