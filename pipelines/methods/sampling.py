@@ -210,11 +210,14 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     from gesture_db.assemble import assemble_actions
     from gesture_db.search import search
     from pipelines.perform.ear import correct_by_ear
+    from pipelines.perform.phrasing import assign_phrasing, phrase_marks
     from pipelines.perform.rules import prepare_events
 
     _name, notes, _strings, events = prepare_events(
         notes, config, instrument=instrument, rng=rng, warp=warp,
         transpose_octaves=transpose_octaves)
+    assign_phrasing(events, notes, config)  # the phrase's level, as the rules' goal
+    phrase_marks(events, config)
     correct_by_ear(events, _name, config)  # fingers where the notes sound in tune
     index, source, transfer = database.index_for(_name)
     targets, bowed = targets_from_events(events, notes, sampled_from=source)

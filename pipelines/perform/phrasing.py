@@ -253,11 +253,17 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
     Examples
     --------
     >>> from pipelines.perform.config import default_config
-    >>> onset = np.arange(9) * 0.5
-    >>> db = phrase_offsets_db(onset, onset + 0.45, np.full(9, 69), np.ones(9, int),
+    >>> onset = np.r_[np.arange(8) * 0.25, 3.0 + np.arange(8) * 0.25]  # two phrases ...
+    >>> end = onset + 0.24
+    >>> end[[7, 15]] = 2.6, 5.6                   # ... each ending long, before a rest
+    >>> db = phrase_offsets_db(onset, end, np.full(16, 69), np.ones(16, int),
     ...                        default_config())
-    >>> bool(db[0] < db[5] > db[8]), float(np.median(db))
+    >>> bool(db[0] < db[4] > db[7]), round(float(np.median(db)), 9) + 0.0
     (True, 0.0)
+    >>> even = np.arange(9) * 0.5                 # an even scale: no phrase marked
+    >>> phrase_offsets_db(even, even + 0.45, np.arange(9) + 60, np.ones(9, int),
+    ...                   default_config()).tolist()
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     """
     cfg = config["phrasing"]
     onset = np.asarray(onset, dtype=np.float64)
@@ -303,3 +309,32 @@ def assign_phrasing(events: list, notes, config: dict[str, Any]) -> None:
                            np.array([len(e.strings) for e in bowed]), config)
     for e, value in zip(bowed, db, strict=True):
         e.phrase_db = float(value)
+
+
+def phrase_marks(events: list, config: dict[str, Any]) -> None:
+    """Move each event's marked ``dynamic`` (and ``dynamic_next``) to the level its phrase asks.
+
+    For methods that choose by the marked level rather than by a loudness goal (gesture
+    sampling picks its note groups by dynamic): the level whose loudness
+    (:func:`pipelines.perform.loudness.target`) is the mark's plus ``phrase_db``, kept
+    within pppp..ffff (0..9).
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import default_config
+    >>> from pipelines.perform.events import Event
+    >>> e = Event(rows=[0], t0=0.0, end=0.5, strings=[2], semitones=[0.0], dynamic=5.0,
+    ...           label="A4", phrase_db=2.6)   # mf + 2.6 dB is f on the default curve
+    >>> phrase_marks([e], default_config())
+    >>> round(e.dynamic, 6)
+    6.0
+    """
+    from pipelines.perform.loudness import level_of, target
+
+    for e in events:
+        if e.phrase_db:
+            e.dynamic = float(np.clip(level_of(config, target(config, e.dynamic)
+                                               + e.phrase_db), 0.0, 9.0))
+            if e.dynamic_next is not None:
+                e.dynamic_next = float(np.clip(level_of(
+                    config, target(config, e.dynamic_next) + e.phrase_db), 0.0, 9.0))
