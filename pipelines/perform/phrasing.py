@@ -43,6 +43,8 @@ LBDM_WEIGHTS = (0.25, 0.5, 0.25)
 #: Degree of change (|a - b| / (a + b)) below which two intervals count as the same: a 6 %
 #: longer or shorter interval, about a just-noticeable difference of duration.
 _SAME = 0.03
+#: The part's typical strong break, as a percentile of its break strengths (:func:`clarity`).
+STRONG_PERCENTILE = 90.0
 #: How much an even split is preferred where the breaks are equally strong (strength units).
 _EVEN_SPLIT = 0.05
 
@@ -180,10 +182,12 @@ def arch(place: np.ndarray, turn: float) -> np.ndarray:
 
 
 def clarity(label: np.ndarray, strength: np.ndarray) -> np.ndarray:
-    """How clearly the music marks each phrase: the weaker of the two breaks around it, 0..1.
+    """How clearly the music marks each phrase: its weaker break re the part's strong breaks.
 
-    The part's own start and end count as strong as its strongest break, so music that never
-    breaks (an even scale, every break 0) has no clear phrase at all.
+    A phrase's two breaks are the strengths before its first and after its last event; the
+    weaker one is divided by the part's typical strong break (the 90th percentile of its
+    breaks, :data:`STRONG_PERCENTILE`) and capped at 1. The part's own start and end count
+    as 1. Music that never breaks (an even scale, every break 0) marks no phrase at all.
 
     Parameters
     ----------
@@ -194,23 +198,29 @@ def clarity(label: np.ndarray, strength: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    np.ndarray [shape=(n,)]
+    np.ndarray [shape=(n,)], 0..1
         Each event's phrase's clarity.
 
     Examples
     --------
-    >>> clarity(np.array([0, 0, 1, 1]), np.array([0.2, 1.0, 0.1])).tolist()
-    [1.0, 1.0, 1.0, 1.0]
+    >>> strength = np.array([0.0, 0.2, 0.0, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0])  # strong: 0.08
+    >>> label = np.array([0, 0, 1, 1, 2, 2, 2, 2, 2, 2])  # breaks 0.2 and 0.05 between
+    >>> clarity(label, strength).round(3).tolist()
+    [1.0, 1.0, 0.625, 0.625, 0.625, 0.625, 0.625, 0.625, 0.625, 0.625]
     >>> clarity(np.array([0, 0, 1, 1]), np.zeros(3)).tolist()
     [0.0, 0.0, 0.0, 0.0]
     """
-    ends = strength.max(initial=0.0)
-    around = np.concatenate([[ends], strength, [ends]])
+    strength = np.asarray(strength, dtype=np.float64)
+    strong = np.percentile(strength, STRONG_PERCENTILE) if strength.size else 0.0
+    strong = strong if strong > 0 else strength.max(initial=0.0)
+    if strong <= 0:
+        return np.zeros(label.size)
+    around = np.concatenate([[strong], strength, [strong]])
     out = np.zeros(label.size)
     for p in np.unique(label):
         idx = np.flatnonzero(label == p)
-        out[idx] = min(around[idx[0]], around[idx[-1] + 1])
-    return out
+        out[idx] = min(around[idx[0]], around[idx[-1] + 1]) / strong
+    return np.minimum(out, 1.0)
 
 
 def _arches(onset: np.ndarray, label: np.ndarray, turn: float) -> np.ndarray:
