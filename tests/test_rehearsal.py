@@ -10,7 +10,9 @@ from hypothesis import strategies as st
 
 from data_schemas.errors import ArcoError, ParameterError
 from pipelines.methods.rehearsal import (
+    SAME_LEVEL,
     SLOPE_RANGE,
+    bracket,
     next_shift,
     note_errors,
     rehearse,
@@ -65,6 +67,68 @@ def test_a_tries_score_is_its_mean_square_miss(rows):
         assert score[i] == (pytest.approx(sum(heard) / len(heard)) if heard else np.inf)
 
 
+def test_a_note_heard_either_side_of_its_goal_is_played_between():
+    # the cello's C#2 at mf, seed 0 (levels re its calibrated level; dB re its goal): too
+    # loud at 0, too soft at -0.95 and -0.56; the secant through the two nearest (both soft)
+    # stepped to +0.22, past the try already heard 3 dB loud
+    c = next_shift(np.array([[0.0], [-0.95], [-0.56]]), np.array([[3.0], [-2.1], [-1.4]]),
+                   np.full(1, 3.1), tolerance=0.5, largest=3.0)[0]
+    assert -0.56 < c < 0.0
+    assert c == pytest.approx(-0.56 + 1.4 * 0.56 / 4.4)  # the line through the two
+    # its neighbour D2: a small secant sent it 1.1 levels down, where it fell out of
+    # Helmholtz motion (-4.5 dB); the third try repeated that step; now it stays between
+    d = next_shift(np.array([[0.0], [-0.27], [-1.14]]), np.array([[1.1], [1.0], [-4.5]]),
+                   np.full(1, 3.83), tolerance=0.5, largest=3.0)[0]
+    assert -1.14 < d < -0.27
+    assert d == pytest.approx(-0.27 - 1.0 * 0.87 / 5.5)
+
+
+def _monotone(knots):
+    """A note's miss (dB) against its level shift: increasing, piecewise linear."""
+    levels = np.linspace(-3.0, 3.0, len(knots))
+    miss = np.cumsum(knots) - 6.0
+    return lambda s: np.interp(s, levels, miss, left=miss[0] - 1.0, right=miss[-1] + 1.0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(knots=st.lists(st.floats(0.2, 4.0), min_size=3, max_size=7),
+       levels=st.lists(st.floats(-3.0, 3.0), min_size=2, max_size=4, unique=True))
+def test_a_bracketed_note_stays_inside_its_tightest_bracket(knots, levels):
+    # on a note whose loudness rises with its level (the truth), the next try lies between
+    # the loudest try still soft and the softest already loud: inside what was heard
+    truth = _monotone(knots)
+    tried = np.array(levels)
+    missed = truth(tried)
+    soft, loud = tried[missed < -0.5], tried[missed > 0.5]
+    if soft.size == 0 or loud.size == 0 or np.min(np.abs(missed)) <= 0.5:
+        return
+    lo, hi = soft.max(), loud.min()
+    if hi - lo <= SAME_LEVEL:
+        return
+    nxt = next_shift(tried[:, None], missed[:, None], np.full(1, 3.0), tolerance=0.5,
+                     largest=3.0)[0]
+    assert lo < nxt < hi
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.tuples(st.integers(-30, 30), st.floats(-8.0, 8.0)), min_size=2,
+                max_size=5, unique_by=lambda t: t[0]))
+def test_any_bracket_is_between_two_neighbouring_tries_that_missed_either_way(tries):
+    # whatever the note's response (fragile, not monotonic), a bracket holds no try inside
+    # and its ends missed the goal either way; with none, every try missed the same way
+    tried, missed = np.array(tries).T
+    tried = tried / 10.0  # levels a tenth apart at least
+    found = bracket(tried, missed, float(tried[np.argmin(np.abs(missed))]))
+    if found is None:
+        assert np.all(missed >= 0) or np.all(missed <= 0)
+        return
+    (a, b), (ma, mb) = found
+    assert a < b and np.sign(ma) * np.sign(mb) < 0
+    assert not np.any((tried > a) & (tried < b))
+    heard = set(zip(tried.tolist(), missed.tolist(), strict=True))
+    assert (a, ma) in heard and (b, mb) in heard
+
+
 def test_the_next_try_starts_from_each_notes_nearest_try():
     tried = np.array([[0.0, 0.0], [2.0, 1.0], [4.0, -1.0]])
     missed = np.array([[-1.0, 0.9], [0.3, 2.0], [2.0, 0.2]])
@@ -117,6 +181,43 @@ def test_rehearsal_brings_each_reachable_note_to_its_goal():
     np.testing.assert_array_equal(perf.events["shift"], plays[-1])  # the best was the last
     before = note_errors(listen(play(None)), RATE, perf)
     np.testing.assert_allclose(before, offset, atol=0.05)  # the errors are the fake's truth
+
+
+def test_a_note_that_falls_out_of_helmholtz_motion_is_not_played_there_again():
+    # a fake note like the cello's D2: 1 dB loud, 0.4 dB a level (under the lanes' 3.15),
+    # and 5.5 dB softer below -0.6 levels, where it leaves Helmholtz motion; a second note
+    # on its goal. The secant's second try falls off the cliff; every later try stays
+    # between it and the best try, and none is played twice
+    def miss(shift):
+        return 1.0 + 0.4 * shift - 5.5 * (shift < -0.6)
+
+    plays: list[np.ndarray] = []
+
+    def play(shift):
+        shift = np.zeros(2) if shift is None else np.asarray(shift, float)
+        plays.append(shift)
+        return Performance(pd.DataFrame(), _part(2).assign(shift=shift), [])
+
+    def listen(perf):
+        ev = perf.events
+        level = ev["goal_lufs"] + np.array([miss(ev["shift"].iloc[0]), 0.0])
+        t = np.arange(int(RATE * (ev["played_end"].iloc[-1] + 0.1))) / RATE
+        audio = np.zeros(t.size)
+        for a, b, db in zip(ev["t0"], ev["played_end"], level, strict=True):
+            inside = (t >= a) & (t < b)
+            audio[inside] = 10 ** ((db + 3.01) / 20) * np.sin(2 * np.pi * 997 * t[inside])
+        return audio
+
+    config = load_config()
+    config["loudness"].update(rehearsals=4, rehearsal_tolerance_db=0.5)
+    perf, audio = rehearse(play, listen, config, RATE)
+    levels = np.array([p[0] for p in plays])
+    assert len(plays) == 5 and np.unique(levels.round(6)).size == levels.size
+    cliff = int(np.flatnonzero(levels < -0.6)[0])
+    assert cliff == 2  # the bounded secant's step
+    assert np.all((levels[cliff + 1:] > levels[cliff]) & (levels[cliff + 1:] < levels[1]))
+    err = note_errors(audio, RATE, perf)
+    assert 0.5 < err[0] < miss(levels[1]) and abs(err[1]) < 0.05
 
 
 def test_the_part_keeps_the_try_it_heard_best():

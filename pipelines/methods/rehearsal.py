@@ -6,9 +6,10 @@ the calibration note met at another intonation. A player hears that and bows the
 again, louder or softer. :func:`rehearse` does the same: it plays the part, measures each
 bowed note's loudness (ungated BS.1770 from 30 ms after its start,
 :func:`pipelines.reports.loudness.note_loudness`, the balance bench's measure), moves each
-note's loudness goal by what it missed (a secant step on the note's own tries) and plays
-again, each note from the try of its own that came nearest; the part keeps the try whose
-notes missed least (mean square), so the audio returned is audio that was heard.
+note's level by what it missed (:func:`note_step`: between two of its own tries that missed
+either way, else a secant step from the try of its own that came nearest) and plays again;
+the part keeps the try whose notes missed least (mean square), so the audio returned is
+audio that was heard.
 
 Examples
 --------
@@ -35,6 +36,8 @@ from pipelines.perform.loudness import lane_slope
 #: The secant's bounds, in multiples of the lanes' expected dB a level (a note whose
 #: loudness barely follows its level is not pushed to the lanes' end by one step).
 SLOPE_RANGE = (0.3, 3.0)
+#: levels: tries nearer than this count as one level (no secant through them).
+SAME_LEVEL = 0.02
 
 
 def note_errors(audio: np.ndarray, sample_rate: float, perf: Performance) -> np.ndarray:
@@ -82,30 +85,105 @@ def next_shift(tried: np.ndarray, missed: np.ndarray, slope: np.ndarray, *,
     Returns
     -------
     np.ndarray [shape=(events,)], levels
-        From each note's nearest try, ``shift - missed / slope``; after two tries the slope
-        is the secant through the note's two nearest, bounded to :data:`SLOPE_RANGE` times
-        the expected one. Where the two disagree in sign (the note grew softer as it was
-        bowed harder: a fragile bowing) the note stays at its nearest try, as a player goes
-        back to the bowing that spoke.
+        Each note's :func:`note_step`, bounded to ``largest``.
     """
-    score = np.where(np.isfinite(missed), np.abs(missed), np.inf)
-    order = np.argsort(score, axis=0, kind="stable")
-    cols = np.arange(tried.shape[1])
-    shift, miss = tried[order[0], cols], missed[order[0], cols]
-    slope = np.asarray(slope, np.float64)
-    fragile = np.zeros(shift.shape, bool)
-    if tried.shape[0] >= 2:
-        step = shift - tried[order[1], cols]
-        moved = np.abs(step) > 0.02
-        with np.errstate(invalid="ignore", divide="ignore"):
-            secant = (miss - missed[order[1], cols]) / np.where(moved, step, 1.0)
-        usable = moved & np.isfinite(secant) & (secant > 0.0)
-        fragile = moved & np.isfinite(secant) & (secant <= 0.0)
-        bounded = np.clip(secant, SLOPE_RANGE[0] * slope, SLOPE_RANGE[1] * slope)
-        slope = np.where(usable, bounded, slope)
-    step_needed = np.isfinite(miss) & (np.abs(miss) > tolerance) & ~fragile
-    change = np.where(step_needed, miss / slope, 0.0)
-    return np.clip(shift - change, -largest, largest)
+    slope = np.broadcast_to(np.asarray(slope, np.float64), tried.shape[1:])
+    shift = np.array([note_step(tried[:, i], missed[:, i], float(slope[i]),
+                                tolerance=tolerance) for i in range(tried.shape[1])])
+    return np.clip(shift, -largest, largest)
+
+
+def note_step(tried: np.ndarray, missed: np.ndarray, slope: float, *,
+              tolerance: float) -> float:
+    """One note's next level shift from its tries, levels.
+
+    Parameters
+    ----------
+    tried : np.ndarray [shape=(tries,)], levels
+        The note's level shifts played so far.
+    missed : np.ndarray [shape=(tries,)], dB
+        What each try measured minus the goal (NaN: not heard).
+    slope : float, dB per level
+        The lanes' expected loudness change a level.
+    tolerance : float, dB
+        A nearest try that missed by less is kept.
+
+    Returns
+    -------
+    float, levels
+        As a player corrects a bowing:
+
+        - where two tries at neighbouring levels missed either way (too loud at one, too
+          soft at the other: :func:`bracket`), the line through the two -- the step stays
+          inside what was heard and never repeats an overshoot;
+        - else from the nearest try (the first of equals) by the secant through it and the
+          next nearest at another level, bounded to :data:`SLOPE_RANGE` times ``slope``;
+          with a single level heard, by ``slope`` itself;
+        - a note that grew softer as it was bowed harder (a fragile bowing) goes back to its
+          nearest try, as a player goes back to the bowing that spoke.
+
+    Examples
+    --------
+    >>> round(note_step(np.array([0.0, -1.0, 0.5]), np.array([-1.4, -2.1, 3.0]), 3.0,
+    ...                 tolerance=0.5), 2)        # between 0 (-1.4 dB) and 0.5 (+3.0 dB)
+    0.16
+    """
+    heard = np.isfinite(missed)
+    if not heard.any():
+        return float(tried[0])
+    best = int(np.argmin(np.where(heard, np.abs(missed), np.inf)))
+    shift, miss = float(tried[best]), float(missed[best])
+    if abs(miss) <= tolerance:
+        return shift
+    pair = bracket(tried[heard], missed[heard], shift)
+    if pair is not None:  # regula falsi inside the bracket
+        (a, b), (ma, mb) = pair
+        return a - ma * (b - a) / (mb - ma)
+    other = heard & (np.abs(tried - shift) > SAME_LEVEL)
+    if not other.any():
+        return shift - miss / slope
+    j = int(np.argmin(np.where(other, np.abs(missed), np.inf)))
+    secant = (miss - missed[j]) / (shift - tried[j])
+    if secant <= 0.0:  # softer when bowed harder: a fragile bowing, back to the nearest
+        return shift
+    return shift - miss / float(np.clip(secant, SLOPE_RANGE[0] * slope,
+                                        SLOPE_RANGE[1] * slope))
+
+
+def bracket(tried: np.ndarray, missed: np.ndarray,
+            near: float) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """The two tries at neighbouring levels that missed either way, nearest ``near``.
+
+    Parameters
+    ----------
+    tried : np.ndarray [shape=(tries,)], levels
+        A note's heard level shifts.
+    missed : np.ndarray [shape=(tries,)], dB
+        What each measured minus the goal.
+    near : float, levels
+        The level the bracket should hold or lie nearest (the nearest try's).
+
+    Returns
+    -------
+    ((float, float), (float, float)) or None
+        Their levels and misses, ordered by level: neighbours in level order (no try
+        between them; tries within :data:`SAME_LEVEL` are one level) whose misses differ in
+        sign; None when every try missed the same way.
+
+    Examples
+    --------
+    >>> bracket(np.array([0.0, 0.3, 0.5, 2.0]), np.array([-1.4, -2.0, 3.0, -1.0]), 0.0)
+    ((0.3, 0.5), (-2.0, 3.0))
+    """
+    order = np.argsort(tried, kind="stable")
+    level, miss = tried[order], missed[order]
+    sign = np.sign(miss)
+    i = np.flatnonzero((np.diff(level) > SAME_LEVEL) & (sign[:-1] * sign[1:] < 0.0))
+    if i.size == 0:
+        return None
+    gap = np.maximum(level[i] - near, 0.0) + np.maximum(near - level[i + 1], 0.0)
+    k = int(i[np.argmin(gap)])
+    return ((float(level[k]), float(level[k + 1])), (float(miss[k]), float(miss[k + 1])))
 
 
 def try_score(missed: np.ndarray) -> np.ndarray:
