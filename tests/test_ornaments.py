@@ -301,3 +301,54 @@ def test_trill_start_and_nachschlag_follow_the_settings(plain_config):
     assert main_first.steps[:3] == (0.0, 2.0, 0.0) and main_first.steps[-2:] == (-1.0, 0.0)
     upper_first = figure("trill", 0.0, 1.0, 2, 1, 60.0, plain_config, nachschlag=False)
     assert upper_first.steps == (2.0, 0.0) * 4
+
+
+def test_wavy_line_trills_every_note_under_it_to_its_upper_neighbour_in_the_key(tmp_path):
+    """A wavy line alone (no "tr") from E5 over G5 to A5 in C major: each note trills to the
+    next note of the scale (F5: 1 semitone; A5, B5: 2); a "tr" note after it keeps its own."""
+    from pipelines.score import read_score
+
+    def note(step: str, octave: int, mark: str = "") -> str:
+        return (f"<note><pitch><step>{step}</step><octave>{octave}</octave></pitch>"
+                f"<duration>1</duration><type>quarter</type><notations><ornaments>{mark}"
+                "</ornaments></notations></note>")
+
+    path = tmp_path / "wavy.musicxml"
+    path.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?><score-partwise version="3.1"><part-list>'
+        '<score-part id="P1"><part-name>Violin</part-name></score-part></part-list>'
+        '<part id="P1"><measure number="1"><attributes><divisions>1</divisions><key>'
+        "<fifths>0</fifths></key><time><beats>4</beats><beat-type>4</beat-type></time>"
+        "<clef><sign>G</sign><line>2</line></clef></attributes>"
+        + note("E", 5, '<wavy-line type="start"/>') + note("G", 5)
+        + note("A", 5, '<wavy-line type="stop"/>') + note("B", 4, "<trill-mark/>")
+        + "</measure></part></score-partwise>")
+    notes = read_score(path)
+    assert notes["ornament"].tolist() == ["trill"] * 4
+    assert notes["ornament_upper"].tolist() == [1, 2, 2, 1]
+
+
+def test_movement_titles_are_headings_and_tempo_words_not_directions(tmp_path):
+    """'cresc.' and 'dolce' do not head a movement; its first measures' words and its
+    written tempo do (music21's own word for a bare metronome number does not)."""
+    from music21 import expressions, note, stream, tempo
+
+    part = stream.Part(id="P1")
+    part.partName = "Violin"
+    for movement, number, words in ((1, 1, ["cresc."]), (1, 2, []), (1, 3, ["dolce"]),
+                                    (2, 1, ["II. Scherzo"]), (2, 2, [])):
+        m = stream.Measure(number=number)
+        if (movement, number) == (2, 1):
+            m.insert(0, tempo.MetronomeMark(text="Presto", number=160, referent=1.0))
+        if (movement, number) == (1, 1):
+            m.insert(0, tempo.MetronomeMark(number=90, referent=1.0))
+        for w in words:
+            m.insert(0, expressions.TextExpression(w))
+        m.append(note.Note("A4", quarterLength=4.0))
+        part.append(m)
+    score = stream.Score()
+    score.insert(0, part)
+    path = tmp_path / "titles.musicxml"
+    score.write("musicxml", fp=str(path))
+    titles = list_movements(read_score_report(path)[0])["title"].tolist()
+    assert titles == ["", "II. Scherzo - Presto"]

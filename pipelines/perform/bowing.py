@@ -36,7 +36,7 @@ class Stroke:
     ``t`` (s), ``speed`` (m/s, unsigned) and ``position`` (0 frog .. 1 tip) are arrays of the
     same shape; ``force_scale`` scales the force with the planned speed change;
     ``acceleration`` (m/s^2) is the largest change of speed the stroke allows
-    (:func:`stroke_acceleration`).
+    (:func:`stroke_acceleration`), per segment of ``t`` where a grace note starts it.
     """
 
     events: list[int]
@@ -45,7 +45,7 @@ class Stroke:
     speed: np.ndarray
     position: np.ndarray
     travel: float
-    acceleration: float
+    acceleration: float | np.ndarray
     force_scale: float = 1.0
     speed_scale: float = 1.0
 
@@ -60,7 +60,8 @@ class Stroke:
         return float(self.t[-1])
 
 
-def limit_acceleration(t: np.ndarray, speed: np.ndarray, max_acceleration: float) -> np.ndarray:
+def limit_acceleration(t: np.ndarray, speed: np.ndarray,
+                       max_acceleration: float | np.ndarray) -> np.ndarray:
     """Lower a speed curve until no segment changes faster than ``max_acceleration``.
 
     Parameters
@@ -69,8 +70,8 @@ def limit_acceleration(t: np.ndarray, speed: np.ndarray, max_acceleration: float
         Increasing times.
     speed : np.ndarray [shape=(n,)], m/s
         Target speeds (>= 0); the result is pointwise <= the target.
-    max_acceleration : float, m/s^2
-        Largest allowed change of speed per second.
+    max_acceleration : float or np.ndarray [shape=(n - 1,)], m/s^2
+        Largest allowed change of speed per second (one value, or one per segment).
 
     Returns
     -------
@@ -185,7 +186,7 @@ def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
     for idx in _stroke_groups(events):
         t = _stroke_grid(events, idx, dt)
         target = _target_speed(events, idx, t, config)
-        accel = stroke_acceleration(t, target, bow)
+        accel = _start_acceleration(events[idx[0]], t, target, bow)
         speed = limit_acceleration(t, target, accel)
         travel = float(budget.travel(np.trapezoid(speed, t)))
         strokes.append(Stroke(idx, events[idx[0]].direction, t, speed, np.zeros_like(t),
@@ -195,6 +196,24 @@ def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
         warnings.append(f"{squeezed} strokes were slowed below "
                         f"{bow['min_speed_scale']:.2f} x their speed to fit the bow")
     return strokes
+
+
+def _start_acceleration(first: Event, t: np.ndarray, target: np.ndarray,
+                        bow: dict[str, Any]) -> float | np.ndarray:
+    """A stroke's acceleration, m/s^2: quicker over a grace note that starts it.
+
+    :func:`stroke_acceleration` of the stroke; over the segments of a grace note that
+    starts it, raised so that the grace reaches its speed within :data:`SHORT_STROKE_RAMP`
+    of its own length (a player flicks it), one value per segment of ``t`` then.
+    """
+    accel = stroke_acceleration(t, target, bow)
+    if not first.grace or t.size < 2:
+        return accel
+    span = t <= first.end + 1e-9
+    quick = stroke_acceleration(t[span], target[span], bow)
+    if quick <= accel:
+        return accel
+    return np.where(t[1:] <= first.end + 1e-9, quick, accel)
 
 
 def _stroke_groups(events: list[Event]) -> list[list[int]]:

@@ -59,6 +59,7 @@ class Event:
     ornament: Ornament | None = None
     touch: bool = False
     node: int = 0
+    grace: bool = False
     goal_lufs: float = np.nan
     phrase_db: float = 0.0
 

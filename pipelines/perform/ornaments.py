@@ -195,6 +195,7 @@ def time_graces(events: list, cols: dict[str, np.ndarray], config: dict[str, Any
         group = events[k:j]
         if j >= len(events):
             for e in group:
+                e.grace = True
                 e.end = e.t0 + grace
             break
         main = events[j]
@@ -208,6 +209,7 @@ def time_graces(events: list, cols: dict[str, np.ndarray], config: dict[str, Any
             start = main.t0
             main.t0 += len(group) * g
         for n, e in enumerate(group):
+            e.grace = True
             e.t0 = start + n * g
             e.end = e.t0 + g
             e.dynamic = main.dynamic

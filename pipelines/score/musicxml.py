@@ -172,7 +172,9 @@ def _read_part(part, index: int,
         number = int(m.number) if getattr(m, "number", None) is not None else 0
         if previous is not None and number < previous:  # numbers restart: a new movement
             state.movement += 1
+            state.bars = 0
         previous = number
+        state.bars += 1
         state.measure = number
         containers = [(m, 1, 0.0)]
         for k, v in enumerate(m.getElementsByClass(stream.Voice)):
@@ -197,6 +199,10 @@ def _read_part(part, index: int,
     return raw, state.tempi
 
 
+#: Words in a movement's first measures head it (its number, name and tempo).
+HEADING_BARS = 2
+
+
 @dataclass
 class _PartState:
     """What the reader keeps while it walks one part."""
@@ -209,7 +215,9 @@ class _PartState:
     sforzandi: list[float] = field(default_factory=list)
     tempi: list[tuple[float, float, bool]] = field(default_factory=list)
     where: dict[int, tuple[float, int, float]] = field(default_factory=dict)
+    notes: dict[tuple[float, int], object] = field(default_factory=dict)  # (beat, voice)
     located: dict[int, tuple[int, int]] = field(default_factory=dict)  # measure, movement
+    bars: int = 0  # measures read in the current movement
 
     def report(self, raw: RawPart, kind: str, detail: str = "") -> None:
         raw.unperformed.append({"measure": self.measure, "movement": self.movement,
@@ -234,14 +242,15 @@ def _read_direction(raw: RawPart, el, beat: float, state: _PartState) -> None:
         if bpm:
             state.tempi.append((beat, float(bpm), True))
             state.main_tempo = float(bpm)
-        _title(raw, state, str(getattr(el, "text", None) or ""))
+        if not getattr(el, "textImplicit", False):  # not music21's word for the number
+            _title(raw, state, str(getattr(el, "text", None) or ""), tempo=True)
     elif "TextExpression" in classes or "TempoText" in classes:
         text = str(getattr(el, "content", None) or getattr(el, "text", "") or "")
         if not text:
             return
         raw.words.append((beat, text))
-        _title(raw, state, text)
         bpm = _word_tempo(text)
+        _title(raw, state, text, tempo=bpm is not None)
         if bpm is not None:
             state.tempi.append((beat, bpm, False))
             state.main_tempo = bpm
@@ -255,10 +264,22 @@ def _read_direction(raw: RawPart, el, beat: float, state: _PartState) -> None:
             state.report(raw, kind, _describe(el))
 
 
-def _title(raw: RawPart, state: _PartState, text: str) -> None:
-    """The first words of a movement head it."""
-    if text.strip() and state.movement not in raw.movement_titles:
-        raw.movement_titles[state.movement] = text.strip()[:80]
+def _title(raw: RawPart, state: _PartState, text: str, *, tempo: bool) -> None:
+    """Head a movement with the words of its first two measures ("II. Scherzo - Allegro").
+
+    Directions ("cresc.", "pizz.", "sul G") never head it; later in the movement, only
+    tempo words do, and only a movement without a heading yet.
+    """
+    text = " ".join(text.split())
+    if not text or (not tempo and classify(text)):
+        return
+    title = raw.movement_titles.get(state.movement)
+    if state.bars <= HEADING_BARS:
+        if title is None or text not in title.split(" - "):
+            raw.movement_titles[state.movement] = (
+                text if title is None else f"{title} - {text}")[:80]
+    elif title is None and tempo:
+        raw.movement_titles[state.movement] = text[:80]
 
 
 def _describe(el) -> str:
@@ -306,6 +327,8 @@ def _add_note(raw: RawPart, el, beat: float, measure: int, voice: int,
         pitched = _sounding(pitched, flags, raw, state)
     state.where[id(el)] = (beat, voice, duration)
     state.located[id(el)] = (measure, state.movement)
+    if not grace:
+        state.notes[(round(beat, 6), voice)] = el
     for k, (ps, n) in enumerate(pitched):
         midi = int(round(ps))
         tie = n.tie.type if n.tie is not None else (el.tie.type if el.tie is not None else None)
@@ -413,7 +436,7 @@ def _add_spanners(raw: RawPart, part, state: _PartState) -> None:
         elif "TremoloSpanner" in classes:
             _mark_notes(raw, elements, where, {"tremolo": True})
         elif "TrillExtension" in classes:
-            _wavy_line(raw, elements, where)
+            _wavy_line(raw, elements, state)
         elif is_reported(kind := mark_kind("spanner", sp)):
             state.measure, state.movement = state.located.get(
                 id(elements[0]), (state.measure, state.movement))
@@ -427,12 +450,27 @@ def _mark_notes(raw: RawPart, elements: list, where: dict, flags: dict[str, obje
             note.update(flags)
 
 
-def _wavy_line(raw: RawPart, elements: list, where: dict) -> None:
-    """Notes under a trill's wavy line trill (with the first note's auxiliary, if it has one)."""
-    beats = {round(where[id(e)][0], 6) for e in elements}
-    under = [n for n in raw.notes if round(n["onset_beats"], 6) in beats]
-    upper = next((n["ornament_upper"] for n in under if n.get("ornament") == "trill"), None)
+def _wavy_line(raw: RawPart, elements: list, state: _PartState) -> None:
+    """Notes under a trill's wavy line trill, from its first note to its last in its voice.
+
+    A note without a "tr" of its own takes the auxiliary of a "tr" on the same pitch under
+    the line (a trill tied on), else its upper neighbour in the key (music21 resolves it
+    from the key signature), as a "tr" on it would.
+    """
+    from music21 import expressions
+
+    start, voice, _ = state.where[id(elements[0])]
+    end = max(state.where[id(e)][0] for e in elements)
+    under = [n for n in raw.notes if not n["grace"] and n["voice"] == voice
+             and start - 1e-6 <= n["onset_beats"] <= end + 1e-6]
+    marked = {n["midi_pitch"]: n["ornament_upper"] for n in under
+              if n.get("ornament") == "trill" and n.get("ornament_upper") is not None}
     for note in under:
-        if note.get("ornament") is None:
-            note["ornament"] = "trill"
-            note["ornament_upper"] = upper if upper is not None else 2
+        if note.get("ornament") is not None:
+            continue
+        if note["midi_pitch"] in marked:
+            note.update(ornament="trill", ornament_upper=marked[note["midi_pitch"]])
+            continue
+        el = state.notes.get((round(note["onset_beats"], 6), voice))
+        flags = ornament_flags(el, expressions.Trill()) if el is not None else None
+        note.update(flags or {"ornament": "trill", "ornament_upper": 2})

@@ -1,0 +1,183 @@
+"""Ornaments, grace notes, harmonics and movements as heard: `arco render`, then pYIN.
+
+A short violin score (written with music21 below) is rendered through the command line with
+the rules, and the audio is pitch-tracked with librosa's pYIN. The expected pitches come
+from the score and music theory (a trill on C5 in C major alternates with D5, a mordent on
+C5 dips to B4, a natural harmonic touched at D5 on the D string sounds D5, D4 stopped with
+G4 touched sounds D6); the expected times from the tempo and the documented rules (a trill
+plays 8 notes per quarter, an acciaccatura takes ``grace_duration`` before the beat, an
+appoggiatura half of its main note).
+
+Movement 1 ("Allegro", quarter = 80, 2/4, 1.5 s a measure), measures:
+
+1. C5 half under a wavy line alone (no "tr"): a trill to D5 at 8 x 80 / 60 = 10.7 notes/s
+2. C5 quarter with a mordent (B4), E5 quarter with an inverted mordent (F5)
+3. G5 quarter with a turn (A5, G5, F5, G5), acciaccatura B4 -> A4 quarter
+4. appoggiatura B4 -> A4 quarter, D5 quarter natural harmonic (diamond, D string)
+5. D4 stopped + G4 diamond (artificial harmonic, sounds D6) quarter, quarter rest
+
+Movement 2 ("Adagio", quarter = 60, measure numbers restart): F#5 half with "tr" in
+D major (G5 above), taken alone with ``--movement 2``: a trill at 8 notes/s.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+RATE = 44100
+HOP = 128
+GRACE = 0.07  # s, [articulations] grace_duration in rules.toml
+
+
+def _write_score(path: Path) -> Path:
+    from music21 import articulations, chord, expressions, key, meter, note, stream, tempo
+
+    part = stream.Part(id="P1")
+    part.partName = "Violin"
+
+    def n(name: str, ql: float = 1.0, *exprs) -> note.Note:
+        x = note.Note(name, quarterLength=ql)
+        x.expressions.extend(exprs)
+        return x
+
+    first = [stream.Measure(number=i) for i in range(1, 6)]
+    first[0].insert(0, meter.TimeSignature("2/4"))
+    first[0].insert(0, tempo.MetronomeMark(text="Allegro", number=80, referent=1.0))
+    wavy = n("C5", 2.0)
+    first[0].append(wavy)
+    part.insert(0, expressions.TrillExtension(wavy))
+    first[1].append([n("C5", 1.0, expressions.Mordent()),
+                     n("E5", 1.0, expressions.InvertedMordent())])
+    first[2].append([n("G5", 1.0, expressions.Turn()),
+                     note.Note("B4", type="eighth").getGrace(appoggiatura=False), n("A4")])
+    natural = n("D5")
+    natural.notehead = "diamond"
+    natural.articulations.append(articulations.StringHarmonic())
+    first[3].append([note.Note("B4", type="eighth").getGrace(appoggiatura=True), n("A4"),
+                     natural])
+    touch = note.Note("G4")
+    touch.notehead = "diamond"
+    artificial = chord.Chord([note.Note("D4"), touch], quarterLength=1.0)
+    artificial.articulations.append(articulations.StringHarmonic())
+    first[4].append([artificial, note.Rest(quarterLength=1.0)])
+    second = stream.Measure(number=1)
+    second.insert(0, key.KeySignature(2))
+    second.insert(0, tempo.MetronomeMark(text="Adagio", number=60, referent=1.0))
+    second.append(n("F#5", 2.0, expressions.Trill()))
+    for measure in [*first, second]:
+        part.append(measure)
+    score = stream.Score()
+    score.insert(0, part)
+    score.write("musicxml", fp=str(path))
+    return path
+
+
+def _render(folder: Path, *extra: str) -> np.ndarray:
+    """`arco render` with the rules (no rehearsal: one play, to keep the test quick)."""
+    import pipelines.cli.main as cli
+
+    config = folder / "quick.toml"
+    config.write_text("[loudness]\nrehearsals = 0\n")
+    out = folder / f"render{'-'.join(extra)}.wav"
+    argv = ["render", str(folder / "score.musicxml"), "--method", "rules", "--seed", "0",
+            "--config", str(config), "--quiet", "-o", str(out), *extra]
+    assert cli.main(argv) == 0
+    audio, rate = sf.read(out)
+    assert rate == RATE
+    return audio if audio.ndim == 1 else audio.mean(axis=1)
+
+
+def _track(audio: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Times (s, frame centres) and MIDI pitches of the voiced pYIN frames."""
+    import librosa
+
+    f0, voiced, _ = librosa.pyin(audio.astype(np.float64), fmin=380.0, fmax=1400.0, sr=RATE,
+                                 frame_length=1024, hop_length=HOP)
+    t = np.arange(f0.size) * HOP / RATE
+    keep = voiced & np.isfinite(f0)
+    return t[keep], librosa.hz_to_midi(f0[keep])
+
+
+@pytest.fixture(scope="module")
+def heard(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("heard")
+    _write_score(folder / "score.musicxml")
+    first, second = _render(folder), _render(folder, "--movement", "2")
+    return _track(first), _track(second), first.size / RATE, second.size / RATE
+
+
+def _runs(track, t0: float, t1: float, min_s: float = 0.02) -> list[tuple[int, float]]:
+    """Successive steady pitches (rounded MIDI) in [t0, t1) held at least ``min_s``, with
+    the time each starts; passing frames between two pitches are skipped."""
+    t, midi = track
+    m = (t >= t0) & (t < t1)
+    t, p = t[m], np.round(midi[m]).astype(int)
+    edges = np.r_[0, np.flatnonzero(np.diff(p)) + 1, p.size]
+    runs: list[tuple[int, float]] = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        if t[b - 1] - t[a] + HOP / RATE >= min_s and (not runs or runs[-1][0] != p[a]):
+            runs.append((int(p[a]), float(t[a])))
+    return runs
+
+
+def _trill_rate(track, t0: float, t1: float, lower: int, upper: int) -> float:
+    """Notes per second of a trill between ``lower`` and ``upper`` (MIDI), from crossings
+    of the pitch half-way between them."""
+    t, midi = track
+    m = (t >= t0) & (t < t1)
+    assert np.percentile(midi[m], 10) == pytest.approx(lower, abs=0.3)
+    assert np.percentile(midi[m], 90) == pytest.approx(upper, abs=0.3)
+    side = np.sign(midi[m] - (lower + upper) / 2.0)
+    cross = t[m][np.flatnonzero(side[1:] != side[:-1])]
+    return (cross.size - 1) / (cross[-1] - cross[0])
+
+
+def test_wavy_line_trill_is_heard_at_the_tempo_rate(heard):
+    first = heard[0]
+    rate = _trill_rate(first, 0.05, 1.3, 72, 74)
+    assert rate == pytest.approx(8 * 80 / 60, rel=0.1)  # 8 notes per quarter at 80 / min
+    assert _runs(first, 0.0, 0.2, min_s=0.03)[0][0] == 74  # starts on the upper note
+
+
+def test_second_movement_trill_is_heard_at_its_own_tempo(heard):
+    second, seconds = heard[1], heard[3]
+    assert 2.0 <= seconds < 4.0 < heard[2]  # the movement alone (the first lasts 7.5 s)
+    assert _trill_rate(second, 0.05, 1.7, 78, 79) == pytest.approx(8.0, rel=0.1)
+
+
+def test_mordents_and_turn_are_heard_in_order(heard):
+    first = heard[0]
+    mordent = _runs(first, 1.52, 2.2)
+    assert [p for p, _ in mordent] == [72, 71, 72]
+    assert mordent[1][1] == pytest.approx(1.5 + 0.06, abs=0.04)  # a 0.06 s figure note
+    assert [p for p, _ in _runs(first, 2.27, 2.95)] == [76, 77, 76]
+    turn = _runs(first, 3.02, 3.7)
+    assert [p for p, _ in turn] == [81, 79, 77, 79]
+    assert turn[-1][1] - turn[0][1] < 0.25  # quick notes, then the main note held
+
+
+def test_grace_notes_are_heard_before_and_on_the_beat(heard):
+    first = heard[0]
+    t, midi = first
+    before = (t > 3.75 - GRACE) & (t < 3.75 + 0.01)  # B4 in the grace's 0.07 s (frame centres)
+    assert np.sum(np.round(midi[before]) == 71) * HOP / RATE >= 0.02  # main before: 0.015
+    acciaccatura = _runs(first, 3.6, 4.4, min_s=0.015)  # G5, B4 before the beat, A4 on it
+    assert [p for p, _ in acciaccatura][-3:] == [79, 71, 69]
+    assert acciaccatura[-1][1] == pytest.approx(3.75, abs=0.03)
+    appoggiatura = _runs(first, 4.5, 5.2, min_s=0.03)  # B4 on the beat, half of A4
+    assert [p for p, _ in appoggiatura] == [71, 69]
+    assert appoggiatura[0][1] == pytest.approx(4.5, abs=0.04)
+    assert appoggiatura[1][1] == pytest.approx(4.5 + 0.375, abs=0.03)
+
+
+def test_harmonics_are_heard_at_their_sounding_pitch(heard):
+    t, midi = heard[0]
+    natural = midi[(t > 5.4) & (t < 5.9)]
+    artificial = midi[(t > 6.15) & (t < 6.65)]
+    assert natural.size > 100 and artificial.size > 100
+    assert np.median(natural) == pytest.approx(74.0, abs=0.2)  # D5 on the D string
+    assert np.median(artificial) == pytest.approx(86.0, abs=0.2)  # two octaves above D4
