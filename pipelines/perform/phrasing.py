@@ -21,7 +21,8 @@ step limit they took range from the phrase arch instead of adding to it).
   phrase the music marks gets the whole arch; one that only a length limit made (an even
   scale, a run without breaks) gets ``even_depth`` of it and of the step limit: a player
   plays a plain scale evenly and shapes the phrases the music has. A phrase whose weaker
-  break is at least ``clear_break`` of the part's strongest counts as fully marked.
+  break is at least ``clear_break`` of the part's typical strong break counts as fully
+  marked.
 - :func:`phrase_offsets_db`: the phrase arches (each scaled so that neighbouring events
   differ by at most ``max_step_db``, the evenness a player keeps within a line), plus the
   chord weight, centred on the median event.
@@ -341,10 +342,11 @@ def phrase_marks(events: list, config: dict[str, Any]) -> None:
     """
     from pipelines.perform.loudness import level_of, target
 
+    def phrased(level: float, db: float) -> float:
+        return float(np.clip(level_of(config, target(config, level) + db), 0.0, 9.0))
+
     for e in events:
         if e.phrase_db:
-            e.dynamic = float(np.clip(level_of(config, target(config, e.dynamic)
-                                               + e.phrase_db), 0.0, 9.0))
+            e.dynamic = phrased(e.dynamic, e.phrase_db)
             if e.dynamic_next is not None:
-                e.dynamic_next = float(np.clip(level_of(
-                    config, target(config, e.dynamic_next) + e.phrase_db), 0.0, 9.0))
+                e.dynamic_next = phrased(e.dynamic_next, e.phrase_db)
