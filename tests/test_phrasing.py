@@ -131,6 +131,24 @@ def test_offsets_keep_the_median_and_the_step_limit(m):
     assert np.ptp(db) <= cfg["phrase_depth"] + 1e-9
 
 
+@settings(max_examples=60, deadline=None)
+@given(melodies(min_size=3, max_size=60), st.data())
+def test_each_marking_keeps_its_median_and_its_shape(m, data):
+    """Centred within each marking: every marking's median event keeps its loudness, and
+    within a marking the offsets keep the one-marking curve's shape (a constant apart)."""
+    onset, end, pitch = m
+    config = default_config()
+    marks = np.array(data.draw(st.lists(st.sampled_from([3.0, 3.2, 5.0, 6.4]),
+                                        min_size=onset.size, max_size=onset.size)))
+    ones = np.ones(onset.size, int)
+    db = phrase_offsets_db(onset, end, pitch, ones, config, marks)
+    flat = phrase_offsets_db(onset, end, pitch, ones, config)
+    for level in np.unique(np.round(marks)):
+        inside = np.round(marks) == level
+        assert np.median(db[inside]) == pytest.approx(0.0, abs=1e-9)
+        np.testing.assert_allclose(np.ptp(db[inside] - flat[inside]), 0.0, atol=1e-9)
+
+
 def test_an_even_scale_is_played_nearly_flat_and_a_marked_phrase_swells():
     config = default_config()
     cfg = config["phrasing"]

@@ -25,7 +25,9 @@ step limit they took range from the phrase arch instead of adding to it).
   marked.
 - :func:`phrase_offsets_db`: the phrase arches (each scaled so that neighbouring events
   differ by at most ``max_step_db``, the evenness a player keeps within a line), plus the
-  chord weight, centred on the median event.
+  chord weight, centred on the median event of each marked dynamic: the marking sets a
+  part's level and the phrase shapes around it, so parts that meet at one marking in
+  different places of their phrases still meet at one loudness.
 
 Every arch is zero at a phrase boundary, so the curve is continuous from phrase to phrase.
 The offsets move each event's loudness goal (:func:`pipelines.perform.loudness.even_out`),
@@ -236,7 +238,8 @@ def _arches(onset: np.ndarray, label: np.ndarray, turn: float) -> np.ndarray:
 
 
 def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
-                      n_strings: np.ndarray, config: dict[str, Any]) -> np.ndarray:
+                      n_strings: np.ndarray, config: dict[str, Any],
+                      marks: np.ndarray | None = None) -> np.ndarray:
     """Each event's phrase dynamics, dB re its marked dynamic's loudness.
 
     Parameters
@@ -254,12 +257,16 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
         ``phrase_depth`` (dB, at a :func:`clarity` of at least ``clear_break``),
         ``even_depth`` (share of the depth and of ``max_step_db`` that a phrase the music
         does not mark keeps), ``turn``, ``max_step_db`` (dB), ``chord_db`` (dB).
+    marks : np.ndarray [shape=(n,)], dynamic levels, optional
+        Each event's marked dynamic (0 = pppp .. 9 = ffff); the offsets are centred within
+        each marking (rounded to a level). Default: one marking.
 
     Returns
     -------
     np.ndarray [shape=(n,)], dB
         Zeros when phrasing is off; otherwise the arch plus the chord weight, minus
-        their median (the median event keeps its mark's loudness).
+        their median within each marking (the median event of a marking keeps its
+        loudness).
 
     Examples
     --------
@@ -271,6 +278,11 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
     ...                        default_config())
     >>> bool(db[0] < db[4] > db[7]), round(float(np.median(db)), 9) + 0.0
     (True, 0.0)
+    >>> marks = np.r_[np.full(8, 3.0), np.full(8, 6.0)]   # p, then f: centred in each
+    >>> db = phrase_offsets_db(onset, end, np.full(16, 69), np.ones(16, int),
+    ...                        default_config(), marks)
+    >>> [round(float(np.median(db[m])), 9) + 0.0 for m in (marks == 3, marks == 6)]
+    [0.0, 0.0]
     >>> even = np.arange(9) * 0.5                 # an even scale: no phrase marked
     >>> phrase_offsets_db(even, even + 0.45, np.arange(9) + 60, np.ones(9, int),
     ...                   default_config()).tolist()
@@ -294,7 +306,16 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
         if steepest > limit:
             curve[idx] *= limit / steepest
     curve += cfg["chord_db"] * (np.asarray(n_strings) > 1)
-    return curve - np.median(curve)
+    return _centre(curve, np.zeros(onset.size) if marks is None else marks)
+
+
+def _centre(db: np.ndarray, marks: np.ndarray) -> np.ndarray:
+    """``db`` minus its median within each marking (``marks`` rounded to a level)."""
+    group = np.round(np.asarray(marks, dtype=np.float64))
+    out = np.array(db, dtype=np.float64)
+    for g in np.unique(group):
+        out[group == g] -= np.median(out[group == g])
+    return out
 
 
 def assign_phrasing(events: list, notes, config: dict[str, Any]) -> None:
@@ -317,7 +338,8 @@ def assign_phrasing(events: list, notes, config: dict[str, Any]) -> None:
     pitch = notes["midi_pitch"].to_numpy()
     db = phrase_offsets_db(np.array([e.t0 for e in bowed]), np.array([e.end for e in bowed]),
                            np.array([pitch[e.rows].max() for e in bowed]),
-                           np.array([len(e.strings) for e in bowed]), config)
+                           np.array([len(e.strings) for e in bowed]), config,
+                           np.array([e.dynamic for e in bowed]))
     for e, value in zip(bowed, db, strict=True):
         e.phrase_db = float(value)
 
