@@ -3,9 +3,10 @@
 A stroke is a run of events played in one bow direction without a bow change (a slur, or a
 single detached note). Its bow speed follows the dynamics, starts and ends at rest, and never
 changes faster than the maximum bow acceleration. The bow-length budget: each stroke's travel
-is computed before it is played; a stroke that would run off the bow is slowed down, and a
-stroke followed without a pause by a longer one travels further (faster, within a limit) so
-that the next one fits. ``bow_position`` therefore stays inside [0, 1] by construction.
+is computed before it is played; each run of strokes joined without a retake is distributed
+on the bow as a whole (:mod:`pipelines.perform.bow_distribution`: long strokes a little
+slower, short ones a little faster, the run started where it fits), so ``bow_position``
+stays inside [0, 1] by construction.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import pandas as pd
 
 from data_schemas.bow import BowBudget
 from data_schemas.instruments import finger_ratio, limits
+from pipelines.perform.bow_distribution import distribute
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
@@ -232,58 +234,73 @@ def _stroke_groups(events: list[Event]) -> list[list[int]]:
 
 def _place_strokes(strokes: list[Stroke], events: list[Event], config: dict[str, Any],
                    budget: BowBudget) -> int:
-    """Place the strokes on the bow, in order, scaling their speed to fit the budget.
+    """Place the strokes on the bow, one run without retakes at a time, scaling their speed.
 
-    Returns the number of strokes slowed below ``bow.min_speed_scale``.
+    Each run (:func:`_runs`) is planned as a whole (:func:`~pipelines.perform.bow_distribution
+    .distribute`); a stroke then plays from where the previous one ended, slowed further
+    only if its acceleration limit left it short of the plan. Returns the number of strokes
+    slowed below ``bow.min_speed_scale``.
     """
     bow = config["bow"]
-    regions = config["bow_regions"]
-    position: float | None = None
+    position = budget.home(strokes[0].direction) if strokes else 0.0
     squeezed = 0
-    for i, s in enumerate(strokes):
-        first = events[s.events[0]]
-        d = s.direction
-        retake = i == 0 or _retake(strokes[i - 1], s, first, bow["retake_gap"])
-        if position is None:
-            position = budget.home(d)
-        span = np.inf
-        if first.region is not None:
-            span = bow["region_span"]
-            half = min(s.travel, span) / 2
-            position = float(np.clip(regions[first.region] - d * half, *budget.bounds))
-        elif retake:
-            position = budget.place(position, s.travel, d)
-        avail = min(budget.ahead(position, d), span)
-        scale = _speed_scale(strokes, i, events, position, budget, bow)
-        if s.travel * scale > avail:
-            scale = max(avail, 0.0) / s.travel
-        if scale != 1.0:
-            s.speed = limit_acceleration(s.t, s.speed * scale, s.acceleration)
-            s.speed_scale = scale
-            s.force_scale = float(np.sqrt(np.clip(scale, 0.1, 2.0)))
-            if scale < bow["min_speed_scale"]:
-                squeezed += 1
-        run = np.concatenate([[0.0], np.cumsum(np.diff(s.t) * (s.speed[1:] + s.speed[:-1]) / 2)])
-        s.position = np.clip(position + d * budget.travel(run), 0.0, 1.0)
-        s.travel = float(budget.travel(run[-1]))
-        position = float(s.position[-1])
+    for run, start in _runs(strokes, events, config, budget):
+        first = events[strokes[run[0]].events[0]]
+        cap = np.full(len(run), bow["max_speed_scale"])
+        if first.region is not None and strokes[run[0]].travel > 0:
+            cap[0] = min(cap[0], bow["region_span"] / strokes[run[0]].travel)
+        start, scales = distribute(
+            np.array([strokes[i].travel for i in run]),
+            np.array([strokes[i].stop - strokes[i].start for i in run]),
+            np.array([strokes[i].direction for i in run]), bounds=budget.bounds,
+            max_scale=cap, prefer=position if start is None else start,
+            start=start if first.region is not None else None)
+        position = start
+        for i, scale in zip(run, scales, strict=True):
+            position = _play_stroke(strokes[i], float(scale), position, budget)
+            squeezed += strokes[i].speed_scale < bow["min_speed_scale"]
     return squeezed
 
 
-def _speed_scale(strokes: list[Stroke], i: int, events: list[Event], position: float,
-                 budget: BowBudget, bow: dict[str, Any]) -> float:
-    """Speed-up of stroke ``i`` that leaves room for a longer next stroke (no retake)."""
-    s = strokes[i]
-    if i + 1 >= len(strokes) or s.travel <= 0:
-        return 1.0
-    nxt = strokes[i + 1]
-    nfirst = events[nxt.events[0]]
-    if _retake(s, nxt, nfirst, bow["retake_gap"]) or nfirst.region is not None:
-        return 1.0
-    avail_next = budget.ahead(position + s.direction * s.travel, nxt.direction)
-    if nxt.travel > avail_next:
-        return min(bow["max_speed_scale"], (s.travel + nxt.travel - avail_next) / s.travel)
-    return 1.0
+def _runs(strokes: list[Stroke], events: list[Event], config: dict[str, Any],
+          budget: BowBudget) -> list[tuple[list[int], float | None]]:
+    """Runs of strokes joined without a retake, each with its start if fixed.
+
+    A bow-region word fixes a run's start (the region's place less half the stroke's
+    travel); otherwise it is None (free).
+    """
+    bow = config["bow"]
+    runs: list[tuple[list[int], float | None]] = []
+    for i, s in enumerate(strokes):
+        first = events[s.events[0]]
+        if first.region is not None:
+            half = min(s.travel, bow["region_span"]) / 2
+            where = config["bow_regions"][first.region] - s.direction * half
+            runs.append(([i], float(np.clip(where, *budget.bounds))))
+        elif i == 0 or _retake(strokes[i - 1], s, first, bow["retake_gap"]):
+            runs.append(([i], None))
+        else:
+            runs[-1][0].append(i)
+    return runs
+
+
+def _play_stroke(s: Stroke, scale: float, position: float, budget: BowBudget) -> float:
+    """Play a stroke from ``position`` at ``scale`` of its speed; return where it ends.
+
+    The scale is cut where the margin ahead is nearer (the acceleration limit can leave a
+    stroke short of its plan).
+    """
+    avail = max(budget.ahead(position, s.direction), 0.0)
+    if s.travel * scale > avail:
+        scale = avail / s.travel
+    if scale != 1.0:
+        s.speed = limit_acceleration(s.t, s.speed * scale, s.acceleration)
+        s.speed_scale = scale
+        s.force_scale = float(np.sqrt(np.clip(scale, 0.1, 2.0)))
+    run = np.concatenate([[0.0], np.cumsum(np.diff(s.t) * (s.speed[1:] + s.speed[:-1]) / 2)])
+    s.position = np.clip(position + s.direction * budget.travel(run), 0.0, 1.0)
+    s.travel = float(budget.travel(run[-1]))
+    return float(s.position[-1])
 
 
 def _retake(prev: Stroke, s: Stroke, first: Event, gap: float) -> bool:
@@ -348,6 +365,7 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
     """
     rows: list[dict[str, np.ndarray]] = []
     roll_time = config["articulations"]["roll_time"]
+    starts = {s.events[0]: float(s.position[0]) for s in strokes if s.position.size}
     for s in strokes:
         last = s.events[-1]
         for j, k in enumerate(s.events):
@@ -377,7 +395,8 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                                   + ornament_cents(e.ornament, t[m], floor=-100.0 * semis),
                                   **_fingers(e)))
             if k == last:
-                rows.extend(_after_stroke(events, k, t, force, beta, pos))
+                rows.extend(_after_stroke(events, k, t, force, beta, pos,
+                                          starts.get(k + 1)))
             elif t.size:
                 nxt = events[s.events[j + 1]]
                 for string, semis in zip(e.strings, e.semitones, strict=True):
@@ -432,15 +451,22 @@ def _fingers(e: Event) -> dict[str, Any]:
 
 
 def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: np.ndarray,
-                  beta: np.ndarray, pos: np.ndarray) -> list[dict[str, np.ndarray]]:
-    """After a stroke: lift the bow (rest, string change) or keep it resting on the string."""
+                  beta: np.ndarray, pos: np.ndarray,
+                  next_start: float | None) -> list[dict[str, np.ndarray]]:
+    """After a stroke: lift the bow or keep it resting on the string.
+
+    The bow lifts at a rest, a string change and a retake (``next_start``, the next
+    stroke's first bow position, is not where this one ended).
+    """
     e = events[k]
     if not t.size:
         return []
     nxt = events[k + 1] if k + 1 < len(events) else None
     end = t[-1]
     out = []
-    same = nxt is not None and not nxt.pizz and set(nxt.strings) == set(e.strings)
+    moved = next_start is not None and abs(next_start - float(pos[-1])) > 1e-9
+    same = nxt is not None and not nxt.pizz and set(nxt.strings) == set(e.strings) \
+        and not moved
     for string, semis in zip(e.strings, e.semitones, strict=True):
         if same and not e.rest_after:
             if nxt.t0 - _TICK > end + _TICK:
