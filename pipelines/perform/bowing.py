@@ -20,6 +20,7 @@ import pandas as pd
 from data_schemas.bow import BowBudget
 from data_schemas.instruments import finger_ratio, limits
 from pipelines.perform.bow_distribution import distribute
+from pipelines.perform.bow_speed import limit_acceleration, stroke_acceleration
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
@@ -36,7 +37,8 @@ class Stroke:
     """One bow stroke: event indices, direction (+1 down, -1 up), and its planned shape.
 
     ``t`` (s), ``speed`` (m/s, unsigned) and ``position`` (0 frog .. 1 tip) are arrays of the
-    same shape; ``force_scale`` scales the force with the planned speed change;
+    same shape; ``force_scale`` and ``beta_scale`` scale the force and the bow-bridge
+    distance with the planned speed change (:func:`_play_stroke`);
     ``acceleration`` (m/s^2) is the largest change of speed the stroke allows
     (:func:`stroke_acceleration`), per segment of ``t`` where a grace note starts it.
     """
@@ -50,6 +52,7 @@ class Stroke:
     acceleration: float | np.ndarray
     force_scale: float = 1.0
     speed_scale: float = 1.0
+    beta_scale: float = 1.0
 
     @property
     def start(self) -> float:
@@ -60,76 +63,6 @@ class Stroke:
     def stop(self) -> float:
         """End time (s)."""
         return float(self.t[-1])
-
-
-def limit_acceleration(t: np.ndarray, speed: np.ndarray,
-                       max_acceleration: float | np.ndarray) -> np.ndarray:
-    """Lower a speed curve until no segment changes faster than ``max_acceleration``.
-
-    Parameters
-    ----------
-    t : np.ndarray [shape=(n,)], s
-        Increasing times.
-    speed : np.ndarray [shape=(n,)], m/s
-        Target speeds (>= 0); the result is pointwise <= the target.
-    max_acceleration : float or np.ndarray [shape=(n - 1,)], m/s^2
-        Largest allowed change of speed per second (one value, or one per segment).
-
-    Returns
-    -------
-    np.ndarray [shape=(n,)], m/s
-    """
-    v = speed.astype(np.float64).tolist()
-    dv = (np.diff(t) * max_acceleration).tolist()
-    n = len(v)
-    for k in range(1, n):
-        cap = v[k - 1] + dv[k - 1]
-        if v[k] > cap:
-            v[k] = cap
-    for k in range(n - 2, -1, -1):
-        cap = v[k + 1] + dv[k]
-        if v[k] > cap:
-            v[k] = cap
-    return np.asarray(v)
-
-
-#: A short stroke reaches its speed within this share of its length (when
-#: ``bow.short_stroke_acceleration`` allows).
-SHORT_STROKE_RAMP = 0.25
-
-
-def stroke_acceleration(t: np.ndarray, target: np.ndarray, bow: dict[str, Any]) -> float:
-    """The bow acceleration a stroke is played with, m/s^2.
-
-    ``bow.max_acceleration``, unless the stroke is too short to reach its largest target
-    speed within :data:`SHORT_STROKE_RAMP` of its length at that rate: then the rate that
-    does, up to ``bow.short_stroke_acceleration``.
-
-    Parameters
-    ----------
-    t : np.ndarray [shape=(n,)], s
-        The stroke's times.
-    target : np.ndarray [shape=(n,)], m/s
-        Its target speeds.
-    bow : dict
-        The ``[bow]`` settings.
-
-    Examples
-    --------
-    >>> bow = {"max_acceleration": 5.0, "short_stroke_acceleration": 20.0}
-    >>> stroke_acceleration(np.array([0.0, 1.0]), np.array([0.3, 0.3]), bow)
-    5.0
-    >>> round(stroke_acceleration(np.array([0.0, 0.12]), np.array([0.3, 0.3]), bow), 6)
-    10.0
-    >>> stroke_acceleration(np.array([0.0, 0.03]), np.array([0.3, 0.3]), bow)
-    20.0
-    """
-    base = float(bow["max_acceleration"])
-    length = float(t[-1] - t[0]) if t.size > 1 else 0.0
-    if length <= 0.0 or not target.size:
-        return base
-    needed = float(np.max(target)) / (SHORT_STROKE_RAMP * length)
-    return float(min(max(base, needed), max(base, bow["short_stroke_acceleration"])))
 
 
 def _dynamic_at(e: Event, t: np.ndarray) -> np.ndarray:
@@ -205,7 +138,7 @@ def _start_acceleration(first: Event, t: np.ndarray, target: np.ndarray,
     """A stroke's acceleration, m/s^2: quicker over a grace note that starts it.
 
     :func:`stroke_acceleration` of the stroke; over the segments of a grace note that
-    starts it, raised so that the grace reaches its speed within :data:`SHORT_STROKE_RAMP`
+    starts it, raised so that the grace reaches its speed within :data:`~pipelines.perform.bow_speed.SHORT_STROKE_RAMP`
     of its own length (a player flicks it), one value per segment of ``t`` then.
     """
     accel = stroke_acceleration(t, target, bow)
@@ -296,7 +229,12 @@ def _play_stroke(s: Stroke, scale: float, position: float, budget: BowBudget) ->
     if scale != 1.0:
         s.speed = limit_acceleration(s.t, s.speed * scale, s.acceleration)
         s.speed_scale = scale
-        s.force_scale = float(np.sqrt(np.clip(scale, 0.1, 2.0)))
+        # A player who must slow the bow plays nearer the bridge, and a little heavier
+        # for the bow speed (F_max ~ v / beta, F_min ~ v / beta^2): beta * sqrt(s) and
+        # force * s^(1/4) halve the loudness lost (a 1 s f note on the violin A string
+        # at s 0.7 / 0.5 / 0.35: -1.3 / -2.6 / -5.1 dB instead of -3.0 / -5.9 / -8.9).
+        kept = float(np.clip(scale, 0.1, 2.0))
+        s.force_scale, s.beta_scale = kept ** 0.25, kept ** 0.5
     run = np.concatenate([[0.0], np.cumsum(np.diff(s.t) * (s.speed[1:] + s.speed[:-1]) / 2)])
     s.position = np.clip(position + s.direction * budget.travel(run), 0.0, 1.0)
     s.travel = float(budget.travel(run[-1]))
@@ -330,8 +268,8 @@ def _force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float) -> np.
     return force
 
 
-def _beta(e: Event, t: np.ndarray, config: dict[str, Any]) -> np.ndarray:
-    beta = dynamic_table(config, "beta", _dynamic_at(e, t))
+def _beta(e: Event, t: np.ndarray, config: dict[str, Any], scale: float = 1.0) -> np.ndarray:
+    beta = dynamic_table(config, "beta", _dynamic_at(e, t)) * scale
     if e.technique == "sul_ponticello":
         beta = beta * config["techniques"]["sul_ponticello_beta"]
     elif e.technique == "sul_tasto":
@@ -378,7 +316,7 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
             speed = np.interp(t, s.t, s.speed)
             pos = np.interp(t, s.t, s.position)
             force = _force(e, t, config, force_scale * s.force_scale)
-            beta = _beta(e, t, config)
+            beta = _beta(e, t, config, s.beta_scale)
             n_roll = len(e.roll)
             sustain_from = e.t0 + n_roll * roll_time
             for j_roll, (string, semis) in enumerate(e.roll):
