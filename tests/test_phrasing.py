@@ -17,6 +17,7 @@ from pipelines.perform.phrasing import (
     clarity,
     phrase_offsets_db,
     split_phrases,
+    step_limits_db,
 )
 
 
@@ -127,8 +128,24 @@ def test_offsets_keep_the_median_and_the_step_limit(m):
     db = phrase_offsets_db(onset, end, pitch, np.ones(onset.size, int), config)
     cfg = config["phrasing"]
     assert np.median(db) == pytest.approx(0.0, abs=1e-9)
-    assert np.abs(np.diff(db)).max() <= cfg["max_step_db"] + 1e-9
+    assert np.all(np.abs(np.diff(db)) <= step_limits_db(onset, cfg) + 1e-9)
     assert np.ptp(db) <= cfg["phrase_depth"] + 1e-9
+
+
+def test_a_slow_phrase_of_few_notes_swells_further_than_a_quick_one():
+    """Two phrases of six 0.6 s notes, a rest between: the arch may step slow_step x
+    max_step_db a note (twice as deep as with slow_step 1), and stays inside the limit."""
+    config = default_config()
+    pitch = np.array([60, 62, 64, 65, 67, 69] * 2, float)
+    onset = np.r_[np.arange(6) * 0.6, 4.6 + np.arange(6) * 0.6]
+    depth = {}
+    for slow_step in (1.0, 2.0):
+        config["phrasing"]["slow_step"] = slow_step
+        db = phrase_offsets_db(onset, onset + 0.57, pitch, np.ones(12, int), config)
+        assert np.all(np.abs(np.diff(db)) <= step_limits_db(onset, config["phrasing"]) + 1e-9)
+        depth[slow_step] = np.ptp(db[:6])
+    assert depth[2.0] == pytest.approx(2.0 * depth[1.0], rel=1e-6)
+    assert depth[2.0] > 5.0
 
 
 @settings(max_examples=60, deadline=None)
@@ -155,7 +172,8 @@ def test_an_even_scale_is_played_nearly_flat_and_a_marked_phrase_swells():
     onset = np.arange(25) * 0.6
     scale = phrase_offsets_db(onset, onset + 0.5, np.arange(25) + 55.0, np.ones(25, int),
                               config)
-    assert np.abs(np.diff(scale)).max() <= cfg["even_depth"] * cfg["max_step_db"] + 1e-9
+    assert np.all(np.abs(np.diff(scale))
+                  <= cfg["even_depth"] * step_limits_db(onset, cfg) + 1e-9)
     # two phrases of eight quavers, each ending on a long note and a rest
     onset = np.concatenate([np.arange(8) * 0.25, 3.0 + np.arange(8) * 0.25])
     end = onset + 0.24
@@ -174,7 +192,8 @@ def test_chords_weigh_more_and_phrasing_off_gives_zeros():
     db = phrase_offsets_db(onset, onset + 0.5, np.full(6, 69.0), chords, config)
     cfg = config["phrasing"]  # the even arch under them steps at most even_depth x max_step
     np.testing.assert_allclose(db[1::2] - db[0::2], cfg["chord_db"],
-                               atol=cfg["even_depth"] * cfg["max_step_db"] + 1e-9)
+                               atol=cfg["even_depth"] * step_limits_db(onset, cfg).max()
+                               + 1e-9)
     config = load_config()
     config["phrasing"]["enabled"] = False
     assert np.all(phrase_offsets_db(onset, onset + 0.5, np.full(6, 69.0), chords,
@@ -217,6 +236,7 @@ def test_the_rules_move_each_goal_by_its_phrase(tmp_path):
 
 @pytest.mark.parametrize("text", ["enabled = 1", "phrase_length = 0", "turn = 1.0",
                                   "max_step_db = -1", "phrase_depth = -2", "even_depth = 2",
+                                  "slow_step = 0.5", "slow_note = 0",
                                   "chord_db = 100", "clear_break = 0",
                                   "phrase_min_length = 0"])
 def test_bad_phrasing_settings_are_refused(tmp_path, text):

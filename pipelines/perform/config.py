@@ -109,7 +109,7 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
     "harmonics": {"highest_node": 12.0, "min_beta": 0.2, "segment_beta": 4.0, "force": 2.0},
     "phrasing": {"phrase_length": 600.0, "phrase_min_length": 600.0, "phrase_depth": 30.0,
                  "turn": 0.95, "max_step_db": 30.0, "even_depth": 1.0, "clear_break": 1.0,
-                 "chord_db": 12.0},
+                 "chord_db": 12.0, "slow_note": 60.0, "slow_step": 10.0},
 }
 
 
@@ -239,8 +239,12 @@ def _validate_phrasing(config: dict[str, Any], source: str) -> None:
     if not isinstance(cfg["enabled"], bool):
         raise ParameterError(f"{source}: phrasing.enabled={cfg['enabled']!r} must be true or "
                              "false")
-    for key in ("phrase_length", "phrase_min_length", "turn", "max_step_db", "clear_break"):
+    for key in ("phrase_length", "phrase_min_length", "turn", "max_step_db", "clear_break",
+                "slow_note", "slow_step"):
         _positive(config, "phrasing", key, source)
+    if cfg["slow_step"] < 1:
+        raise ParameterError(f"{source}: phrasing.slow_step={cfg['slow_step']!r} must be >= 1 "
+                             "(a slow note steps at least as much as a quick one)")
     for key in ("phrase_depth", "chord_db", "even_depth"):
         value, upper = cfg[key], _upper("phrasing", key)
         if not _is_number(value) or not 0 <= value <= upper:

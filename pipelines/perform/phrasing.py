@@ -24,7 +24,7 @@ step limit they took range from the phrase arch instead of adding to it).
   break is at least ``clear_break`` of the part's typical strong break counts as fully
   marked.
 - :func:`phrase_offsets_db`: the phrase arches (each scaled so that neighbouring events
-  differ by at most ``max_step_db``, the evenness a player keeps within a line), plus the
+  differ by at most :func:`step_limits_db`, the evenness a player keeps within a line), plus the
   chord weight, centred on the median event of each marked dynamic: the marking sets a
   part's level and the phrase shapes around it, so parts that meet at one marking in
   different places of their phrases still meet at one loudness.
@@ -237,6 +237,23 @@ def _arches(onset: np.ndarray, label: np.ndarray, turn: float) -> np.ndarray:
     return out
 
 
+def step_limits_db(onset: np.ndarray, cfg: dict[str, Any]) -> np.ndarray:
+    """Largest change of the arch from each event to the next, dB.
+
+    ``max_step_db``, times the event's length (onset to the next onset) over ``slow_note``
+    where it is longer, up to ``slow_step`` times: a player's swell is a change in time as
+    much as from note to note, and in a slow movement a phrase of six notes still swells.
+
+    Examples
+    --------
+    >>> cfg = {"max_step_db": 1.8, "slow_note": 0.3, "slow_step": 2.0}
+    >>> step_limits_db(np.array([0.0, 0.2, 0.65, 2.0, 2.1]), cfg).round(2).tolist()
+    [1.8, 2.7, 3.6, 1.8]
+    """
+    ioi = np.diff(np.asarray(onset, dtype=np.float64))
+    return cfg["max_step_db"] * np.clip(ioi / cfg["slow_note"], 1.0, cfg["slow_step"])
+
+
 def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
                       n_strings: np.ndarray, config: dict[str, Any],
                       marks: np.ndarray | None = None) -> np.ndarray:
@@ -256,7 +273,8 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
         break, one longer than twice the second at a break of ``clear_break``),
         ``phrase_depth`` (dB, at a :func:`clarity` of at least ``clear_break``),
         ``even_depth`` (share of the depth and of ``max_step_db`` that a phrase the music
-        does not mark keeps), ``turn``, ``max_step_db`` (dB), ``chord_db`` (dB).
+        does not mark keeps), ``turn``, ``max_step_db`` (dB), ``slow_note`` (s) and
+        ``slow_step`` (:func:`step_limits_db`), ``chord_db`` (dB).
     marks : np.ndarray [shape=(n,)], dynamic levels, optional
         Each event's marked dynamic (0 = pppp .. 9 = ffff); the offsets are centred within
         each marking (rounded to a level). Default: one marking.
@@ -299,12 +317,13 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
     clear = np.minimum(clarity(phrases, strength) / cfg["clear_break"], 1.0)
     weight = cfg["even_depth"] + (1.0 - cfg["even_depth"]) * clear
     curve = cfg["phrase_depth"] * weight * _arches(onset, phrases, cfg["turn"])
-    for p in np.unique(phrases):  # keep each line even: at most max_step_db a step (less
+    limit = step_limits_db(onset, cfg)
+    for p in np.unique(phrases):  # keep each line even: at most the step limit a step (less
         idx = np.flatnonzero(phrases == p)  # where the music marks the phrase less)
-        steepest = np.abs(np.diff(curve[idx])).max(initial=0.0)
-        limit = cfg["max_step_db"] * weight[idx[0]]
-        if steepest > limit:
-            curve[idx] *= limit / steepest
+        step = np.abs(np.diff(curve[idx]))
+        room = limit[idx[:-1]] * weight[idx[0]]
+        if np.any(step > room):
+            curve[idx] *= np.min(room[step > 0] / step[step > 0])
     curve += cfg["chord_db"] * (np.asarray(n_strings) > 1)
     return _centre(curve, np.zeros(onset.size) if marks is None else marks)
 
