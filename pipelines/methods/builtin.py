@@ -52,9 +52,12 @@ def play_feedback(notes: pd.DataFrame, parts: list[int], *, config: dict[str, An
     """``feedback``: the rules' bowing, the listening controller chooses the force."""
     from pipelines.methods.feedback import render_feedback
     from pipelines.perform.rules import fermata_warp
+    from pipelines.perform.shared_phrasing import score_arch
     from pipelines.perform.timing import player_warp
 
     warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    shared = score_arch(notes, parts, config, transpose_octaves=transpose_octaves,
+                        instrument=instrument)
     rng = np.random.default_rng(seed)
     out = []
     for index in parts:
@@ -64,7 +67,7 @@ def play_feedback(notes: pd.DataFrame, parts: list[int], *, config: dict[str, An
             part, config, models_dir=models, instrument=name, skill=skill, seed=seed,
             sample_rate=sample_rate, transpose_octaves=transpose_octaves,
             warp=player_warp(warp, notes, index, seed=seed) if len(parts) > 1 else warp,
-            rng=rng, diagnostics=diagnostics, engine=engine)
+            rng=rng, diagnostics=diagnostics, engine=engine, phrasing=shared)
         y = y if spool is None else spool.put(index, y)
         out.append(PartOutput(index, str(part["part_name"].iloc[0]), name, y, actions,
                               perf.events, diag, part, perf.warnings))

@@ -168,7 +168,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
                     transpose_octaves: bool = False, warp=None,
                     rng: np.random.Generator | None = None,
                     settings: ControllerSettings | None = None, diagnostics: bool = True,
-                    engine: str = "modal",
+                    engine: str = "modal", phrasing=None,
                     ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame | None, Performance]:
     """Play one part with the rules' bowing and the listening controller's force.
 
@@ -201,6 +201,8 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
         never reads them).
     engine : str
         Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
+    phrasing : callable, optional
+        The ensemble's phrase arch (:func:`pipelines.perform.shared_phrasing.score_arch`).
 
     Returns
     -------
@@ -225,7 +227,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     if warp is None:
         warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
     perf = perform_part(notes, config, instrument=name, skill=skill, rng=rng, warp=warp,
-                        transpose_octaves=transpose_octaves)
+                        transpose_octaves=transpose_octaves, phrasing=phrasing)
     plan, span = hop_plan(perf, config, name, sample_rate=sample_rate)
     try:
         models = load_models(models_dir, name)

@@ -12,6 +12,7 @@ from data_schemas.errors import ParameterError
 from pipelines.methods.rehearsal import rehearse
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.perform.rules import fermata_warp, perform_part
+from pipelines.perform.shared_phrasing import score_arch
 from pipelines.perform.timing import player_warp
 
 
@@ -30,7 +31,8 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
     parts : list of int
         Part indices to render (each on its own instrument, then mixed); with several,
         each player deviates a little from the shared time map between bar lines
-        (:func:`pipelines.perform.timing.player_warp`).
+        (:func:`pipelines.perform.timing.player_warp`) and all play the ensemble's phrase
+        arch (:func:`pipelines.perform.shared_phrasing.score_arch`).
     instrument : str, optional
         Override the instrument (only with one part).
     skill : int
@@ -66,6 +68,8 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
     synth = _synth() if audio or rehearsing else None
     show = sys.stderr.isatty() if progress is None else progress
     result = RenderResult(None, sample_rate)
+    shared = score_arch(notes, parts, config, transpose_octaves=transpose_octaves,
+                        instrument=instrument)
     for index in tqdm(parts, desc="render", unit="part", disable=not show):
         part = notes[notes["part_index"] == index]
         name = instrument or str(part["instrument"].iloc[0])
@@ -78,7 +82,7 @@ def render(notes: pd.DataFrame, config: dict[str, Any], *, parts: list[int],
                                         progress=show and len(parts) == 1),
                                   dtype=np.float32)
         perf, sound = _play_part(part, config, listen, sample_rate, instrument=name,
-                                 skill=skill, rng=rng, warp=timed,
+                                 skill=skill, rng=rng, warp=timed, phrasing=shared,
                                  transpose_octaves=transpose_octaves)
         rendered = PartRender(index, str(part["part_name"].iloc[0]), name, perf)
         if audio:

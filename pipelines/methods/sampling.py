@@ -36,6 +36,7 @@ from pipelines.methods.sampling_db import SamplingDatabase, adapt_forces, open_d
 from pipelines.methods.sampling_left_hand import play_left_hand
 from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.rules import fermata_warp
+from pipelines.perform.shared_phrasing import score_arch
 from pipelines.perform.timing import player_warp
 from pipelines.score.select import choose_parts
 
@@ -194,9 +195,12 @@ def _touches(actions: pd.DataFrame, events: list[Event]) -> pd.DataFrame:
 
 def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[str, Any], *,
                 instrument: str | None = None, warp=None, transpose_octaves: bool = False,
-                rng: np.random.Generator | None = None) -> tuple[Performance, pd.DataFrame,
-                                                                  pd.DataFrame]:
+                rng: np.random.Generator | None = None,
+                phrasing=None) -> tuple[Performance, pd.DataFrame, pd.DataFrame]:
     """Sampled actions of one part (no audio).
+
+    ``phrasing``: the ensemble's phrase arch
+    (:func:`pipelines.perform.shared_phrasing.score_arch`); default the part's own.
 
     Returns
     -------
@@ -216,7 +220,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     _name, notes, _strings, events = prepare_events(
         notes, config, instrument=instrument, rng=rng, warp=warp,
         transpose_octaves=transpose_octaves)
-    assign_phrasing(events, notes, config)  # the phrase's level, as the rules' goal
+    assign_phrasing(events, notes, config, phrasing)  # the phrase's level, as the rules'
     phrase_marks(events, config)
     correct_by_ear(events, _name, config)  # fingers where the notes sound in tune
     index, source, transfer = database.index_for(_name)
@@ -298,6 +302,8 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
     database = db if isinstance(db, SamplingDatabase) else open_database(db)
     config = config or load_config()
     warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    shared = score_arch(notes, parts, config, transpose_octaves=transpose_octaves,
+                        instrument=instrument)
     closed = bool(models) and feedback
     show = sys.stderr.isatty() if progress is None else progress
     result = RenderResult(None, sample_rate)
@@ -305,7 +311,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
         rendered = _sampled_part(notes[notes["part_index"] == index], index, database, config,
                                  instrument=instrument, feedback=closed,
                                  warp=player_warp(warp, notes, index, seed=seed)
-                                 if len(parts) > 1 else warp,
+                                 if len(parts) > 1 else warp, phrasing=shared,
                                  transpose_octaves=transpose_octaves)
         if audio:
             _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,
@@ -327,11 +333,12 @@ def _parts_to_play(notes: pd.DataFrame, parts: list[int] | None,
 
 def _sampled_part(part: pd.DataFrame, index: int, database: SamplingDatabase,
                   config: dict[str, Any], *, instrument: str | None, warp, feedback: bool,
-                  transpose_octaves: bool) -> SampledPart:
+                  transpose_octaves: bool, phrasing=None) -> SampledPart:
     """The sampled actions of one part's notes (no audio yet)."""
     name = instrument or str(part["instrument"].iloc[0])
     perf, targets, choices = sample_part(part, database, config, instrument=name, warp=warp,
-                                         transpose_octaves=transpose_octaves)
+                                         transpose_octaves=transpose_octaves,
+                                         phrasing=phrasing)
     return SampledPart(index, str(part["part_name"].iloc[0]), name, perf, targets=targets,
                        choices=choices, feedback=feedback)
 

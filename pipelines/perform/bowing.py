@@ -139,7 +139,8 @@ def _start_acceleration(first: Event, t: np.ndarray, target: np.ndarray,
 
     :func:`stroke_acceleration` of the stroke; over the segments of a grace note that
     starts it, raised so that the grace reaches its speed within
-    :data:`~pipelines.perform.bow_speed.SHORT_STROKE_RAMP` of its own length (a player flicks it), one value per segment of ``t`` then.
+    :data:`~pipelines.perform.bow_speed.SHORT_STROKE_RAMP` of its own length (a player
+    flicks it), one value per segment of ``t`` then.
     """
     accel = stroke_acceleration(t, target, bow)
     if not first.grace or t.size < 2:

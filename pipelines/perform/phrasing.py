@@ -36,6 +36,7 @@ and rehearsal (:mod:`pipelines.methods.rehearsal`) listens for them like for the
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -256,7 +257,8 @@ def step_limits_db(onset: np.ndarray, cfg: dict[str, Any]) -> np.ndarray:
 
 def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
                       n_strings: np.ndarray, config: dict[str, Any],
-                      marks: np.ndarray | None = None) -> np.ndarray:
+                      marks: np.ndarray | None = None,
+                      arch_db: np.ndarray | None = None) -> np.ndarray:
     """Each event's phrase dynamics, dB re its marked dynamic's loudness.
 
     Parameters
@@ -278,6 +280,10 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
     marks : np.ndarray [shape=(n,)], dynamic levels, optional
         Each event's marked dynamic (0 = pppp .. 9 = ffff); the offsets are centred within
         each marking (rounded to a level). Default: one marking.
+    arch_db : np.ndarray [shape=(n,)], dB, optional
+        The arch to use instead of the part's own (:func:`phrase_arch_db`): the ensemble's
+        (:mod:`pipelines.perform.shared_phrasing`), scaled down where it would step
+        further than :func:`step_limits_db` from one of these events to the next.
 
     Returns
     -------
@@ -310,6 +316,31 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
     onset = np.asarray(onset, dtype=np.float64)
     if not cfg["enabled"] or onset.size == 0:
         return np.zeros(onset.size)
+    curve = phrase_arch_db(onset, end, pitch, config) if arch_db is None \
+        else _within_steps(np.array(arch_db, dtype=np.float64), onset, cfg)
+    curve += cfg["chord_db"] * (np.asarray(n_strings) > 1)
+    return _centre(curve, np.zeros(onset.size) if marks is None else marks)
+
+
+def phrase_arch_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
+                   config: dict[str, Any]) -> np.ndarray:
+    """Each event's place on its phrase's arch, dB over the phrase's ends (>= 0).
+
+    The arch of :func:`phrase_offsets_db` before the chord weight and the centring:
+    phrases from :func:`split_phrases`, depth by :func:`clarity`, each phrase scaled to
+    keep within :func:`step_limits_db`.
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import default_config
+    >>> onset = np.r_[np.arange(8) * 0.25, 3.0 + np.arange(8) * 0.25]  # two phrases
+    >>> end = onset + 0.24
+    >>> end[[7, 15]] = 2.6, 5.6
+    >>> phrase_arch_db(onset, end, np.full(16, 69), default_config())[:8].round(2).tolist()
+    [0.0, 1.8, 3.24, 4.04, 4.04, 3.24, 1.8, 0.0]
+    """
+    cfg = config["phrasing"]
+    onset = np.asarray(onset, dtype=np.float64)
     strength = boundary_strength(onset, end, pitch)
     phrases = split_phrases(onset, strength, cfg["phrase_length"],
                             strong=cfg["clear_break"] * strength.max(initial=0.0) or np.inf,
@@ -317,15 +348,21 @@ def phrase_offsets_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
     clear = np.minimum(clarity(phrases, strength) / cfg["clear_break"], 1.0)
     weight = cfg["even_depth"] + (1.0 - cfg["even_depth"]) * clear
     curve = cfg["phrase_depth"] * weight * _arches(onset, phrases, cfg["turn"])
-    limit = step_limits_db(onset, cfg)
     for p in np.unique(phrases):  # keep each line even: at most the step limit a step (less
         idx = np.flatnonzero(phrases == p)  # where the music marks the phrase less)
-        step = np.abs(np.diff(curve[idx]))
-        room = limit[idx[:-1]] * weight[idx[0]]
-        if np.any(step > room):
-            curve[idx] *= np.min(room[step > 0] / step[step > 0])
-    curve += cfg["chord_db"] * (np.asarray(n_strings) > 1)
-    return _centre(curve, np.zeros(onset.size) if marks is None else marks)
+        curve[idx] = _within_steps(curve[idx], onset[idx], cfg, weight[idx[0]])
+    return curve
+
+
+def _within_steps(curve: np.ndarray, onset: np.ndarray, cfg: dict[str, Any],
+                  share: float = 1.0) -> np.ndarray:
+    """``curve`` scaled down until no step exceeds ``share`` of :func:`step_limits_db`."""
+    step = np.abs(np.diff(curve))
+    room = step_limits_db(onset, cfg) * share
+    moving = step > 0
+    if np.any(step > room):
+        return curve * np.min(room[moving] / step[moving])
+    return curve
 
 
 def _centre(db: np.ndarray, marks: np.ndarray) -> np.ndarray:
@@ -337,7 +374,8 @@ def _centre(db: np.ndarray, marks: np.ndarray) -> np.ndarray:
     return out
 
 
-def assign_phrasing(events: list, notes, config: dict[str, Any]) -> None:
+def assign_phrasing(events: list, notes, config: dict[str, Any],
+                    shared: Callable[[np.ndarray], np.ndarray] | None = None) -> None:
     """Set each bowed event's ``phrase_db`` (:func:`phrase_offsets_db`) in place.
 
     Parameters
@@ -350,17 +388,27 @@ def assign_phrasing(events: list, notes, config: dict[str, Any]) -> None:
         The part's notes that the events' ``rows`` index (positionally); ``midi_pitch``.
     config : dict
         Rules configuration (``[phrasing]``).
+    shared : callable, optional
+        The ensemble's arch (dB) at score times (s, the notes' ``onset``), played instead
+        of the part's own (:func:`pipelines.perform.shared_phrasing.ensemble_arch`).
     """
     bowed = [e for e in events if not (e.pizz or e.node)]
     if not bowed:
         return
     pitch = notes["midi_pitch"].to_numpy()
+    arch = None if shared is None else shared(score_onsets(bowed, notes))
     db = phrase_offsets_db(np.array([e.t0 for e in bowed]), np.array([e.end for e in bowed]),
                            np.array([pitch[e.rows].max() for e in bowed]),
                            np.array([len(e.strings) for e in bowed]), config,
-                           np.array([e.dynamic for e in bowed]))
+                           np.array([e.dynamic for e in bowed]), arch)
     for e, value in zip(bowed, db, strict=True):
         e.phrase_db = float(value)
+
+
+def score_onsets(events: list, notes) -> np.ndarray:
+    """Each event's score time (s, its first note's ``onset``, before any player's warp)."""
+    onset = notes["onset"].to_numpy(np.float64)
+    return np.array([onset[e.rows].min() for e in events])
 
 
 def phrase_marks(events: list, config: dict[str, Any]) -> None:

@@ -349,7 +349,8 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
                  skill: int = 3, rng: np.random.Generator | None = None,
                  warp: Callable[[np.ndarray], np.ndarray] | None = None,
                  transpose_octaves: bool = False,
-                 level_shift: np.ndarray | None = None) -> Performance:
+                 level_shift: np.ndarray | None = None,
+                 phrasing: Callable[[np.ndarray], np.ndarray] | None = None) -> Performance:
     """Apply the performance rules to one part.
 
     Parameters
@@ -371,6 +372,9 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
     level_shift : np.ndarray [shape=(events,)], levels, optional
         Added to each event's evened-out dynamic level (what rehearsal heard,
         :mod:`pipelines.methods.rehearsal`); the events are those this call plays, in order.
+    phrasing : callable, optional
+        The ensemble's phrase arch (:func:`pipelines.perform.shared_phrasing.score_arch`),
+        played instead of the part's own.
 
     Returns
     -------
@@ -390,7 +394,7 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         notes, config, instrument=instrument, skill=skill, rng=rng, warp=warp,
         transpose_octaves=transpose_octaves, warnings=warnings)
     inst_cfg = config["instruments"][name]
-    assign_phrasing(events, notes, config)
+    assign_phrasing(events, notes, config, phrasing)
     # the marked dynamic (+ phrasing) -> the bowed lane level (plus what rehearsal heard)
     even_out(events, name, config, warnings, level_shift)
     correct_by_ear(events, name, config, warnings)  # fingers where the notes sound in tune
