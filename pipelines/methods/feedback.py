@@ -235,8 +235,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
         raise ModelError(f"feedback needs {name} models for this {name} part: {exc}") from None
     inst = get_engine(engine, name, sample_rate=sample_rate, seed=seed)
     log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 1]),
-                    settings=settings or FEEDBACK_SETTINGS,
-                    record_diagnostics=diagnostics,
+                    settings=settings or FEEDBACK_SETTINGS, record_diagnostics=diagnostics,
                     planned_force=planned_forces(perf, plan, sample_rate))
     tail = inst.process(int(TAIL * sample_rate), {}, diagnostics=False).audio
     audio = np.concatenate([log.audio, tail]).astype(np.float32)
