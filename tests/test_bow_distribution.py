@@ -10,12 +10,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from data_schemas.bow import BowBudget
 from pipelines.perform import bowing
 from pipelines.perform.bow_distribution import _KNOTS, _cost, distribute
 from pipelines.perform.config import load_config
 from pipelines.perform.rules import perform_part
 
 BOUNDS = (0.03, 0.97)
+BUDGET = BowBudget(bow_length=0.65, margin=0.03)  # its margins: BOUNDS
 
 
 def pwl_cost(s: np.ndarray) -> np.ndarray:
@@ -50,7 +52,7 @@ runs = st.integers(1, 3).flatmap(lambda n: st.tuples(
 @given(runs)
 def test_the_plan_is_as_cheap_as_brute_force_and_stays_on_the_bow(run):
     travel, duration, direction, prefer = (np.array(x) for x in run)
-    start, scale = distribute(travel, duration, direction, bounds=BOUNDS, max_scale=1.5,
+    start, scale = distribute(travel, duration, direction, budget=BUDGET, max_scale=1.5,
                               prefer=float(prefer))
     path = start + np.cumsum(direction * travel * scale)
     assert BOUNDS[0] - 1e-7 <= start <= BOUNDS[1] + 1e-7
@@ -69,7 +71,7 @@ def test_a_run_that_fits_is_played_at_full_speed_from_the_nearest_start(run):
     path = np.r_[0.0, np.cumsum(direction * travel)]
     if np.ptp(path) > BOUNDS[1] - BOUNDS[0]:
         return
-    start, scale = distribute(travel, duration, direction, bounds=BOUNDS, max_scale=1.5,
+    start, scale = distribute(travel, duration, direction, budget=BUDGET, max_scale=1.5,
                               prefer=float(prefer))
     np.testing.assert_array_equal(scale, 1.0)
     lo, hi = BOUNDS[0] - path.min(), BOUNDS[1] - path.max()
@@ -78,7 +80,7 @@ def test_a_run_that_fits_is_played_at_full_speed_from_the_nearest_start(run):
 
 def test_a_fixed_start_and_a_cap_are_kept():
     start, scale = distribute(np.array([0.5, 0.2]), np.ones(2), np.array([1, -1]),
-                              bounds=BOUNDS, max_scale=np.array([0.6, 1.5]), prefer=0.5,
+                              budget=BUDGET, max_scale=np.array([0.6, 1.5]), prefer=0.5,
                               start=0.4)
     assert start == 0.4
     assert scale[0] == pytest.approx(0.6)  # a bow-region word: 0.3 of the bow at most

@@ -19,7 +19,8 @@ Examples
 >>> travel = np.array([0.6, 0.1, 0.6, 0.1, 0.6])      # long down, short up, ...
 >>> direction = np.array([1, -1, 1, -1, 1])
 >>> start, scale = distribute(travel, np.array([1.0, 0.2, 1.0, 0.2, 1.0]), direction,
-...                           bounds=(0.03, 0.97), max_scale=1.5, prefer=0.03)
+...                           budget=BowBudget(0.65, margin=0.03), max_scale=1.5,
+...                           prefer=0.03)
 >>> bool(scale.min() > 0.5), bool(scale[1] > 1.0)   # spread, the short up-bows help
 (True, True)
 >>> path = start + np.cumsum(direction * travel * scale)
@@ -33,6 +34,7 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import linprog
 
+from data_schemas.bow import BowBudget
 from data_schemas.errors import ArcoError
 
 #: Knots of the speed scale's piecewise-linear cost (ln s)^2; the cost below the first knot
@@ -59,15 +61,14 @@ def _segments(cap: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _full_speed_start(travel: np.ndarray, direction: np.ndarray, prefer: float,
-                      bounds: tuple[float, float]) -> float | None:
+                      budget: BowBudget) -> float | None:
     """The start nearest ``prefer`` from which the run fits at full speed, or None."""
-    path = np.r_[0.0, np.cumsum(direction * travel)]
-    lo, hi = bounds[0] - path.min(), bounds[1] - path.max()
+    lo, hi = budget.start_window(np.r_[0.0, np.cumsum(direction * travel)])
     return None if lo > hi + 1e-12 else float(np.clip(prefer, lo, max(lo, hi)))
 
 
 def distribute(travel: np.ndarray, duration: np.ndarray, direction: np.ndarray, *,
-               bounds: tuple[float, float], max_scale: float | np.ndarray,
+               budget: BowBudget, max_scale: float | np.ndarray,
                prefer: float, start: float | None = None) -> tuple[float, np.ndarray]:
     """Start position and speed scale of each stroke of one run without retakes.
 
@@ -79,15 +80,15 @@ def distribute(travel: np.ndarray, duration: np.ndarray, direction: np.ndarray, 
         Each stroke's length (the weight of its speed change).
     direction : np.ndarray [shape=(n,)], int
         +1 down-bow (towards the tip), -1 up-bow.
-    bounds : tuple of float
-        Lowest and highest bow position allowed (share of the hair from the frog).
+    budget : data_schemas.bow.BowBudget
+        The bow: positions stay between its margins (:attr:`~data_schemas.bow.BowBudget.bounds`).
     max_scale : float or np.ndarray [shape=(n,)]
         Largest speed scale of each stroke (below 1 where a stroke may use only part of
         the bow, such as under a bow-region word).
     prefer : float
         Where a free start would go (the bow's position, or its home for a first stroke).
     start : float, optional
-        A fixed start (a bow-region word); default free between ``bounds``.
+        A fixed start (a bow-region word); default free between the margins.
 
     Returns
     -------
@@ -103,11 +104,11 @@ def distribute(travel: np.ndarray, duration: np.ndarray, direction: np.ndarray, 
         return float(start if start is not None else prefer), np.ones(0)
     if np.all(cap >= 1.0):
         first = _full_speed_start(travel, direction, prefer if start is None else start,
-                                  bounds)
+                                  budget)
         if first is not None and (start is None or abs(first - start) < 1e-12):
             return first, np.ones(travel.size)
     return _solve(travel, np.asarray(duration, dtype=np.float64), direction, cap,
-                  bounds, prefer, start)
+                  budget.bounds, prefer, start)
 
 
 def _solve(travel: np.ndarray, duration: np.ndarray, direction: np.ndarray, cap: np.ndarray,
@@ -134,15 +135,10 @@ def _solve(travel: np.ndarray, duration: np.ndarray, direction: np.ndarray, cap:
     c[-2:] = _START_COST
     bounds_list = [(0.0, w) for w in np.concatenate(widths)]
     bounds_list += [bounds] * (n + 1) + [(0.0, None), (0.0, None)]
-    rows, columns, values = [], [], []
-    for k in range(n):  # x_{k+1} - x_k - d_k T_k s_k = 0
-        seg = np.flatnonzero(owner == k)
-        rows += [k] * (seg.size + 2)
-        columns += [x0 + k + 1, x0 + k, *seg]
-        values += [1.0, -1.0, *(-direction[k] * travel[k] * np.ones(seg.size))]
-    rows += [n] * 3  # x_0 - up + down = where the start is wanted
-    columns += [x0, cols - 2, cols - 1]
-    values += [1.0, -1.0, 1.0]
+    k = np.arange(n)  # row k: x_{k+1} - x_k - d_k T_k s_k = 0; row n: x_0 - up + down
+    rows = np.r_[owner, k, k, n, n, n]
+    columns = np.r_[np.arange(n_seg), x0 + k + 1, x0 + k, x0, cols - 2, cols - 1]
+    values = np.r_[-(direction * travel)[owner], np.ones(n), -np.ones(n), 1.0, -1.0, 1.0]
     a_eq = sparse.csr_array((values, (rows, columns)), shape=(n + 1, cols))
     b_eq = np.zeros(n + 1)
     b_eq[n] = prefer if start is None else start

@@ -186,9 +186,8 @@ def _place_strokes(strokes: list[Stroke], events: list[Event], config: dict[str,
         start, scales = distribute(
             np.array([strokes[i].travel for i in run]),
             np.array([strokes[i].stop - strokes[i].start for i in run]),
-            np.array([strokes[i].direction for i in run]), bounds=budget.bounds,
-            max_scale=cap, prefer=position if start is None else start,
-            start=start if first.region is not None else None)
+            np.array([strokes[i].direction for i in run]), budget=budget, max_scale=cap,
+            prefer=position, start=start)
         position = start
         for i, scale in zip(run, scales, strict=True):
             position = _play_stroke(strokes[i], float(scale), position, budget)
