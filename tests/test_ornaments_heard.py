@@ -18,6 +18,11 @@ Movement 1 ("Allegro", quarter = 80, 2/4, 1.5 s a measure), measures:
 
 Movement 2 ("Adagio", quarter = 60, measure numbers restart): F#5 half with "tr" in
 D major (G5 above), taken alone with ``--movement 2``: a trill at 8 notes/s.
+
+A second score (quarter = 60) plays F#5 -> D6 on the E string twice, slurred (a shift: the
+finger glides from F#5 over ``[ornaments] portamento_time``) and in separate bows (the
+finger jumps during the bow change): slurred, the pitches between them are heard for about
+as long as a straight glide over ``portamento_time`` keeps to them; separate, none.
 """
 
 from __future__ import annotations
@@ -181,3 +186,90 @@ def test_harmonics_are_heard_at_their_sounding_pitch(heard):
     assert natural.size > 100 and artificial.size > 100
     assert np.median(natural) == pytest.approx(74.0, abs=0.2)  # D5 on the D string
     assert np.median(artificial) == pytest.approx(86.0, abs=0.2)  # two octaves above D4
+
+
+# A slurred shift, heard. F#5 -> D6 is 8 semitones on the E string (the rules play both
+# there: F#5 is one tone above the open E5, so the D6 is a shift, not a string crossing).
+# Slurred, the rules glide the finger from F#5 over ``portamento_time``; in separate bows
+# the finger jumps during the bow change. A 40 ms glide of 8 semitones (200 semitones/s)
+# is marked unvoiced by pYIN at the hop and frame used above (128, 1024: a clean synthetic
+# sawtooth glide too), so the shift is tracked with 64-sample hops and 512-sample frames.
+SHIFT_HOP, SHIFT_FRAME = 64, 512
+PORTAMENTO = 0.04  # s, [ornaments] portamento_time in rules.toml
+VIBRATO = 0.15  # s, [vibrato] onset_delay (a 1 s note: onset_share x 1 s is no shorter)
+LOW, HIGH = 78, 86  # F#5, D6 (MIDI)
+
+
+def _write_shift_score(path: Path) -> Path:
+    """Quarter = 60, 3/4: F#5 slurred to D6 and a rest, then F#5, D6 in separate bows and a
+    rest (the second notes at 1 s and 4 s)."""
+    from music21 import meter, note, stream, tempo
+    from music21.spanner import Slur
+
+    part = stream.Part(id="P1")
+    part.partName = "Violin"
+    first, second = stream.Measure(number=1), stream.Measure(number=2)
+    first.insert(0, meter.TimeSignature("3/4"))
+    first.insert(0, tempo.MetronomeMark(number=60, referent=1.0))
+    low, high = note.Note("F#5"), note.Note("D6")
+    first.append([low, high, note.Rest(quarterLength=1.0)])
+    part.insert(0, Slur([low, high]))
+    second.append([note.Note("F#5"), note.Note("D6"), note.Rest(quarterLength=1.0)])
+    part.append([first, second])
+    score = stream.Score()
+    score.insert(0, part)
+    score.write("musicxml", fp=str(path))
+    return path
+
+
+def _shift_figures(audio: np.ndarray, onset: float) -> dict[str, float]:
+    """What pYIN hears of the step F#5 -> D6 whose D6 starts at ``onset`` (s).
+
+    Returns
+    -------
+    dict
+        ``middle``: voiced time (s) from ``onset - 0.02`` to ``onset + 0.1`` at least 2.5
+        semitones from both notes; ``left``: last time (s, from ``onset``) within 30 cents of
+        F#5 before ``onset + 0.1``; ``arrived``: first time after it within 30 cents of D6;
+        ``worst``: largest distance (cents) from D6 between ``onset + PORTAMENTO + 0.02``
+        and ``onset + VIBRATO`` (before the vibrato starts).
+    """
+    import librosa
+
+    start = onset - 0.25
+    excerpt = audio[int(start * RATE):int((onset + 0.4) * RATE)].astype(np.float64)
+    f0, voiced, _ = librosa.pyin(excerpt, fmin=380.0, fmax=1400.0, sr=RATE,
+                                 frame_length=SHIFT_FRAME, hop_length=SHIFT_HOP)
+    keep = voiced & np.isfinite(f0)
+    t = start + np.flatnonzero(keep) * SHIFT_HOP / RATE - onset
+    midi = librosa.hz_to_midi(f0[keep])
+    near = (t > -0.02) & (t < 0.1)
+    middle = near & (midi > LOW + 2.5) & (midi < HIGH - 2.5)
+    left = t[near & (np.abs(midi - LOW) < 0.3)].max()
+    arrived = t[(t > left) & (np.abs(midi - HIGH) < 0.3)].min()
+    held = (t > PORTAMENTO + 0.02) & (t < VIBRATO)
+    return {"middle": np.sum(middle) * SHIFT_HOP / RATE, "left": float(left),
+            "arrived": float(arrived), "worst": float(np.max(np.abs(midi[held] - HIGH))) * 100}
+
+
+@pytest.fixture(scope="module")
+def shift(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("shift")
+    _write_shift_score(folder / "score.musicxml")
+    audio = _render(folder)
+    return _shift_figures(audio, 1.0), _shift_figures(audio, 4.0)
+
+
+def test_slurred_shift_is_heard_gliding_and_separate_bows_jump(shift):
+    """Slurred, pYIN hears the pitch pass through the pitches between F#5 and D6 for about
+    as long as a straight glide over ``portamento_time`` keeps to them (3/8 of it, 15 ms),
+    leaving F#5 at the onset and reaching D6 within 30 cents ``portamento_time`` later; in
+    separate bows nothing between them is heard."""
+    slurred, separate = shift
+    straight = (HIGH - LOW - 5) / (HIGH - LOW) * PORTAMENTO  # 15 ms at least 2.5 st from both
+    assert slurred["middle"] >= 0.5 * straight, slurred
+    assert slurred["left"] == pytest.approx(0.0, abs=0.01), slurred
+    assert slurred["arrived"] == pytest.approx(PORTAMENTO, abs=0.015), slurred
+    assert slurred["arrived"] - slurred["left"] >= 0.6 * PORTAMENTO, slurred
+    assert slurred["worst"] < 30.0 and separate["worst"] < 30.0, (slurred, separate)
+    assert separate["middle"] <= min(0.2 * slurred["middle"], 2 * SHIFT_HOP / RATE), separate
