@@ -337,7 +337,7 @@ def phrase_arch_db(onset: np.ndarray, end: np.ndarray, pitch: np.ndarray,
     >>> end = onset + 0.24
     >>> end[[7, 15]] = 2.6, 5.6
     >>> phrase_arch_db(onset, end, np.full(16, 69), default_config())[:8].round(2).tolist()
-    [0.0, 1.8, 3.24, 4.04, 4.04, 3.24, 1.8, 0.0]
+    [0.0, 3.0, 5.41, 6.74, 6.74, 5.41, 3.0, 0.0]
     """
     cfg = config["phrasing"]
     onset = np.asarray(onset, dtype=np.float64)
