@@ -96,13 +96,14 @@ def _render(folder: Path, *extra: str) -> np.ndarray:
     return audio if audio.ndim == 1 else audio.mean(axis=1)
 
 
-def _track(audio: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _track(audio: np.ndarray, hop: int = HOP,
+           frame: int = 1024) -> tuple[np.ndarray, np.ndarray]:
     """Times (s, frame centres) and MIDI pitches of the voiced pYIN frames."""
     import librosa
 
     f0, voiced, _ = librosa.pyin(audio.astype(np.float64), fmin=380.0, fmax=1400.0, sr=RATE,
-                                 frame_length=1024, hop_length=HOP)
-    t = np.arange(f0.size) * HOP / RATE
+                                 frame_length=frame, hop_length=hop)
+    t = np.arange(f0.size) * hop / RATE
     keep = voiced & np.isfinite(f0)
     return t[keep], librosa.hz_to_midi(f0[keep])
 
@@ -242,15 +243,9 @@ def _shift_figures(audio: np.ndarray, onset: float) -> dict[str, float]:
         ``worst``: largest distance (cents) from D6 between ``onset + PORTAMENTO + 0.02``
         and ``onset + VIBRATO`` (before the vibrato starts).
     """
-    import librosa
-
     start = onset - 0.25
-    excerpt = audio[int(start * RATE):int((onset + 0.4) * RATE)].astype(np.float64)
-    f0, voiced, _ = librosa.pyin(excerpt, fmin=380.0, fmax=1400.0, sr=RATE,
-                                 frame_length=SHIFT_FRAME, hop_length=SHIFT_HOP)
-    keep = voiced & np.isfinite(f0)
-    t = start + np.flatnonzero(keep) * SHIFT_HOP / RATE - onset
-    midi = librosa.hz_to_midi(f0[keep])
+    t, midi = _track(audio[int(start * RATE):int((onset + 0.4) * RATE)], SHIFT_HOP, SHIFT_FRAME)
+    t = t + start - onset
     near = (t > -0.02) & (t < 0.1)
     middle = near & (midi > LOW + 2.5) & (midi < HIGH - 2.5)
     left = t[near & (np.abs(midi - LOW) < 0.3)].max()
