@@ -29,9 +29,16 @@ QUIET_DB = 3.0
 TOP_LEVEL = float(_N_LEVELS - 1)
 
 
-@lru_cache(maxsize=1)
 def default_config() -> dict[str, Any]:
-    """Return the shipped rules configuration (loaded once, validated)."""
+    """Return a copy of the shipped rules configuration (read once, validated).
+
+    A fresh copy each call: a caller that changes its copy changes no one else's.
+    """
+    return _copy(_shipped_config())
+
+
+@lru_cache(maxsize=1)
+def _shipped_config() -> dict[str, Any]:
     text = resources.files("pipelines").joinpath("perform/rules.toml").read_text("utf-8")
     config = _with_facts(tomllib.loads(text))
     validate_config(config, source="pipelines/perform/rules.toml")
@@ -57,7 +64,7 @@ def load_config(path: str | os.PathLike | None = None) -> dict[str, Any]:
     ParameterError
         The file is missing, not TOML, or a value is out of range (names file and key).
     """
-    config = _copy(default_config())
+    config = default_config()
     if path is None:
         return config
     path = Path(path)
