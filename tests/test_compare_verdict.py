@@ -20,7 +20,13 @@ from pipelines.reports.intervals import (
     note_arrays,
     winner,
 )
-from pipelines.reports.verdict import note_contexts, note_failures, verdict_sentence, why
+from pipelines.reports.verdict import (
+    note_contexts,
+    note_failures,
+    verdict_sentence,
+    why,
+    why_sentence,
+)
 
 
 def _note(share, hops, attack, c3, c5, pitch=1.0, level=0.0):
@@ -174,11 +180,16 @@ def test_note_contexts_and_failures_classify_each_note():
                            "played_end": [0.45, 0.58, 1.1, 1.9, 2.5],
                            "string": [2, 2, 1, 1, 1], "dynamic": [5.0, 5.0, 7.0, 7.2, 7.2],
                            "n_strings": [1, 1, 2, 1, 1],
-                           "run_position": ["init", "mid", "mid", "end", "iso"]})
+                           "run_position": ["init", "mid", "mid", "end", "iso"],
+                           "slurred": [False, False, True, False, False]})
     notes = [{"start": t} for t in (0.0, 0.51, 0.6, 0.61, 1.2, 2.0)]
     assert note_contexts(notes, events) == [
-        ["attack"], ["short note"], ["string crossing", "double stop", "dynamic change"],
-        ["string crossing", "double stop", "dynamic change"], ["other"], ["attack"]]
+        ["attack"], ["bow change", "short note"],
+        ["slurred", "string crossing", "double stop", "dynamic change"],
+        ["slurred", "string crossing", "double stop", "dynamic change"], ["bow change"],
+        ["attack"]]
+    # events without the stroke column (an older table): no bow-change tags, "other"
+    assert note_contexts(notes[4:5], events.drop(columns="slurred")) == [["other"]]
     ok = _note(0.95, 20, 30.0, 20, 0)
     assert note_failures(ok) == []
     assert note_failures(_note(0.5, 20, float("nan"), 2, 10)) == ["slow attack", "unsteady",
@@ -197,6 +208,8 @@ def test_why_counts_failing_notes_and_lists_the_worst_first():
     assert w["notes"] == 3 and w["failing"] == 2
     assert w["by_failure"] == {"slow attack": 2, "unsteady": 1, "class 5": 1}
     assert w["by_context"]["attack"] == 1 and w["by_context"]["string crossing"] == 1
+    assert w["notes_by_context"]["attack"] == 2 and w["notes_by_context"]["short note"] == 1
+    assert "attack 1 of 2" in why_sentence("rules", w)
     assert [n["measure"] for n in w["worst"]] == [3, 2]
 
 

@@ -75,7 +75,8 @@ class Performance:
     events : pandas.DataFrame
         One row per played event: ``t0``, ``played_end``, ``end`` (s), ``label`` (note
         names), ``direction`` (+1 down, -1 up, 0 pizz), ``string``, ``dynamic``,
-        ``measure``, ``n_strings``, ``run_position``, ``goal_lufs`` (:func:`events_table`).
+        ``measure``, ``n_strings``, ``run_position``, ``slurred``, ``goal_lufs``
+        (:func:`events_table`).
     warnings : list of str
         Things the rules could not do as written (rolled chords, squeezed strokes).
     """
@@ -83,6 +84,12 @@ class Performance:
     actions: pd.DataFrame
     events: pd.DataFrame
     warnings: list[str]
+
+
+def _slurred(events: list[Event]) -> list[bool]:
+    """Per event: bowed in the same stroke as the event before it (no bow change)."""
+    return [k > 0 and e.cont and not e.pizz and not events[k - 1].pizz
+            and events[k - 1].direction == e.direction for k, e in enumerate(events)]
 
 
 def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
@@ -101,7 +108,8 @@ def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
         ``t0``, ``played_end``, ``end`` (s), ``label``, ``direction`` (+1 down, -1 up,
         0 pizz), ``string`` (the top one), ``dynamic``, ``measure`` (of the event's first
         note), ``n_strings`` (2 or more: a double stop or chord), ``run_position``,
-        ``goal_lufs`` (LUFS, :attr:`Event.goal_lufs`), ``phrase_db`` (dB,
+        ``slurred`` (True: played in the same bow stroke as the event before, no bow
+        change), ``goal_lufs`` (LUFS, :attr:`Event.goal_lufs`), ``phrase_db`` (dB,
         :attr:`Event.phrase_db`).
 
     Examples
@@ -121,5 +129,6 @@ def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
         "measure": [int(measure[e.rows[0]]) for e in events],
         "n_strings": [len(e.strings) for e in events],
         "run_position": [e.run_position for e in events],
+        "slurred": _slurred(events),
         "goal_lufs": [e.goal_lufs for e in events],
         "phrase_db": [e.phrase_db for e in events]})

@@ -137,7 +137,10 @@ def _counts(why: Mapping[str, Any]) -> list[str]:
     out = ["<table><tr><th>method</th><th>notes</th><th>failing</th>",
            *(f"<th>{esc(c)}</th>" for c in cols), "</tr>"]
     for m, w in why.items():
-        vals = {**w["by_failure"], **w["by_context"]}
+        total = w.get("notes_by_context", {})
+        vals = {**w["by_failure"],
+                **{c: f"{v} of {total[c]}" if c in total else v
+                   for c, v in w["by_context"].items()}}
         out.append(f"<tr><td>{esc(m)}</td><td>{w['notes']}</td><td>{w['failing']}</td>"
                    + "".join(f"<td>{vals[c]}</td>" for c in cols) + "</tr>")
     out.append("</table>")

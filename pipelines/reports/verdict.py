@@ -8,11 +8,13 @@ classifies every evaluated note of every render:
   hops are not steadily in Helmholtz motion (share below :data:`HELMHOLTZ`) or too many
   of them sound like no violin (class 5 above :data:`CLASS5`);
 - its *context*, from the played events: ``attack`` (it starts from silence: the first
-  note, or the first of a run after a rest), ``string crossing`` (on another string than
-  the note before, without a rest between), ``short note`` (played for less than
-  :data:`SHORT_S`), ``double stop`` (two or more strings at once) and ``dynamic change``
-  (at least :data:`DYNAMIC_STEP` dynamic levels from the note before). A note may have
-  several contexts, or none (``other``).
+  note, or the first of a run after a rest); else ``bow change`` (a new stroke) or
+  ``slurred`` (in the same stroke as the note before: a finger change or a crossing under
+  a slur), and ``string crossing`` (on another string than the note before, without a
+  rest between); ``short note`` (played for less than :data:`SHORT_S`), ``double stop``
+  (two or more strings at once) and ``dynamic change`` (at least :data:`DYNAMIC_STEP`
+  dynamic levels from the note before). A note may have several contexts, or none
+  (``other``: events without the stroke information).
 """
 
 from __future__ import annotations
@@ -39,8 +41,8 @@ SHORT_S = 0.15
 DYNAMIC_STEP = 1.0
 #: A note belongs to the last event starting at most this long after it, s.
 MATCH_S = 0.02
-CONTEXTS = ("attack", "string crossing", "short note", "double stop", "dynamic change",
-            "other")
+CONTEXTS = ("attack", "bow change", "slurred", "string crossing", "short note",
+            "double stop", "dynamic change", "other")
 FAILURES = ("slow attack", "unsteady", "class 5")
 
 
@@ -127,9 +129,13 @@ def note_contexts(notes: Sequence[dict[str, Any]], events: pd.DataFrame) -> list
     --------
     >>> ev = pd.DataFrame({"t0": [0.0, 0.5, 0.6], "played_end": [0.45, 0.58, 1.0],
     ...                    "string": [2, 2, 1], "dynamic": [5.0, 5.0, 7.0],
-    ...                    "n_strings": [1, 1, 2], "run_position": ["init", "mid", "end"]})
-    >>> note_contexts([{"start": 0.0}, {"start": 0.5}, {"start": 0.61}], ev)
-    [['attack'], ['short note'], ['string crossing', 'double stop', 'dynamic change']]
+    ...                    "n_strings": [1, 1, 2], "run_position": ["init", "mid", "end"],
+    ...                    "slurred": [False, False, True]})
+    >>> for tags in note_contexts([{"start": 0.0}, {"start": 0.5}, {"start": 0.61}], ev):
+    ...     print(tags)
+    ['attack']
+    ['bow change', 'short note']
+    ['slurred', 'string crossing', 'double stop', 'dynamic change']
     """
     if not len(events):
         return [["other"] for _ in notes]
@@ -140,8 +146,11 @@ def note_contexts(notes: Sequence[dict[str, Any]], events: pd.DataFrame) -> list
         tags = []
         if prev is None or str(e["run_position"]) in ("init", "iso"):
             tags.append("attack")
-        elif int(e["string"]) != int(prev["string"]):
-            tags.append("string crossing")
+        else:
+            if "slurred" in e.index:
+                tags.append("slurred" if bool(e["slurred"]) else "bow change")
+            if int(e["string"]) != int(prev["string"]):
+                tags.append("string crossing")
         if float(e["played_end"]) - float(e["t0"]) < SHORT_S:
             tags.append("short note")
         if int(e["n_strings"]) >= 2:
@@ -178,6 +187,9 @@ def note_failures(note: Mapping[str, Any]) -> list[str]:
 def why(notes: Sequence[Mapping[str, Any]], *, worst: int = 5) -> dict[str, Any]:
     """Counts of failing notes per failure and per context, and the worst examples.
 
+    ``by_context`` counts the failing notes of each context, ``notes_by_context`` all the
+    notes of each context (so a context's failure rate is their ratio).
+
     ``notes`` are evaluated notes carrying ``failures``, ``contexts``, ``excerpt``,
     ``seed``, ``part``, ``measure`` and ``pitch`` (as :mod:`pipelines.reports.compare`
     annotates them). Worst first: most failures, then lowest Helmholtz share, then slowest
@@ -186,6 +198,7 @@ def why(notes: Sequence[Mapping[str, Any]], *, worst: int = 5) -> dict[str, Any]
     failing = [n for n in notes if n["failures"]]
     by_failure = Counter(f for n in failing for f in n["failures"])
     by_context = Counter(c for n in failing for c in n["contexts"])
+    in_context = Counter(c for n in notes for c in n["contexts"])
 
     def badness(n):
         share = n["helmholtz_share"] if np.isfinite(n["helmholtz_share"]) else 1.0
@@ -197,6 +210,7 @@ def why(notes: Sequence[Mapping[str, Any]], *, worst: int = 5) -> dict[str, Any]
     return {"notes": len(notes), "failing": len(failing),
             "by_failure": {f: by_failure.get(f, 0) for f in FAILURES},
             "by_context": {c: by_context.get(c, 0) for c in CONTEXTS},
+            "notes_by_context": {c: in_context.get(c, 0) for c in CONTEXTS},
             "worst": [{k: n[k] for k in keys} for n in sorted(failing, key=badness)[:worst]]}
 
 
@@ -207,20 +221,23 @@ def why_sentence(method: str, w: Mapping[str, Any]) -> str:
     --------
     >>> w = {"notes": 10, "failing": 3, "by_failure": {"slow attack": 3, "unsteady": 1,
     ...      "class 5": 0}, "by_context": {"attack": 2, "string crossing": 1, "short note": 0,
-    ...      "double stop": 0, "dynamic change": 0, "other": 0}, "worst": [{"excerpt": "x",
+    ...      "double stop": 0, "dynamic change": 0, "other": 0}, "notes_by_context":
+    ...      {"attack": 4, "string crossing": 2}, "worst": [{"excerpt": "x",
     ...      "seed": 0, "part": "Violin I", "measure": 3, "pitch": "A4",
     ...      "failures": ["slow attack"], "contexts": ["attack"], "helmholtz_share": 0.5,
     ...      "attack_ms": 90.0}]}
     >>> import textwrap
     >>> print(textwrap.fill(why_sentence("rules", w), 80))
-    rules: 3 of 10 notes fail (slow attack 3, unsteady 1); at attack 2, string
-    crossing 1; worst: x m. 3 Violin I A4 (slow attack; attack).
+    rules: 3 of 10 notes fail (slow attack 3, unsteady 1); at attack 2 of 4, string
+    crossing 1 of 2; worst: x m. 3 Violin I A4 (slow attack; attack).
     """
     if not w["failing"]:
         return f"{method}: none of {w['notes']} notes fails."
     how = ", ".join(f"{k} {v}" for k, v in w["by_failure"].items() if v)
-    where = ", ".join(f"{k} {v}" for k, v in sorted(w["by_context"].items(),
-                                                      key=lambda kv: -kv[1]) if v)
+    total = w.get("notes_by_context", {})
+    where = ", ".join(f"{k} {v}" + (f" of {total[k]}" if k in total else "")
+                      for k, v in sorted(w["by_context"].items(), key=lambda kv: -kv[1])
+                      if v)
     ex = "; ".join(f"{n['excerpt']} m. {n['measure']} {n['part']} {n['pitch']} "
                    f"({', '.join(n['failures'])}; {', '.join(n['contexts'])})"
                    for n in w["worst"][:2])
