@@ -1,0 +1,203 @@
+"""How fast a string in Helmholtz motion takes the next note: a bow change or a finger change.
+
+Most notes of real music start from the note before, not from silence: at a *bow change*
+(the bow slows to a stop on the string and turns) or, under a slur, at a *finger change*
+with the bow moving. Both are measured on the public block API of
+:class:`synth.instrument.Instrument` (no body), after the same set-up: the bow is set on
+the string at the string's reference force (a start that speaks), accelerates at
+:data:`SETUP_ACCELERATION` to ``bow_velocity`` and the force glides (exponentially) to the
+note's ``bow_force`` between :data:`SETUP_BITE` and :data:`SETUP_BITE` +
+:data:`SETUP_GLIDE`; Helmholtz motion is checked over the last :data:`CHECKED` s before
+the change (:attr:`NoteChange.helmholtz_before`).
+
+- :func:`bow_change`: the bow decelerates at ``acceleration`` through zero and accelerates
+  at the same rate back to ``bow_velocity`` in the other direction, force and beta held;
+- :func:`finger_change`: a finger stops the string ``semitones`` higher at one block's
+  boundary, the bow held.
+
+The attack is the time from the change (the reversal, or the finger's landing) to the first
+of :data:`ATTACK_PERIODS` consecutive slip intervals within
+:data:`synth.playability.PERIOD_TOLERANCE` of the new period (the yardstick's rule,
+:mod:`pipelines.listening.regularity`); None when not reached within :data:`LIMIT`.
+
+Examples
+--------
+>>> c = finger_change("violin", 1, bow_force=1.0, semitones=2.0)
+>>> c.helmholtz_before, c.attack is not None and c.attack < 0.05
+(True, True)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from data_schemas.errors import ParameterError
+from data_schemas.instruments import finger_ratio
+from synth.controls import BowControl
+from synth.instrument import Instrument
+from synth.playability import PERIOD_TOLERANCE
+from synth.strings import InstrumentConstants
+
+#: Output samples per block (the controls ramp linearly within a block).
+HOP = 64
+#: Set-up: bow acceleration (m/s^2), time at the reference force (s), glide to the note's
+#: force (s), time of the change (s from the bow's start).
+SETUP_ACCELERATION, SETUP_BITE, SETUP_GLIDE, CHANGE_AT = 2.0, 0.2, 0.3, 0.8
+#: Span before the change over which Helmholtz motion is checked, s.
+CHECKED = 0.2
+#: Consecutive regular periods that end an attack.
+ATTACK_PERIODS = 5
+#: Longest attack measured, s from the change.
+LIMIT = 0.4
+
+
+@dataclass(frozen=True)
+class NoteChange:
+    """One measured change.
+
+    Attributes
+    ----------
+    helmholtz_before : bool
+        At least 90 % of the slip intervals in the :data:`CHECKED` s before the change are
+        one period (within 3 %): the set-up reached Helmholtz motion.
+    attack : float or None, s
+        From the change to the first of :data:`ATTACK_PERIODS` regular periods.
+    """
+
+    helmholtz_before: bool
+    attack: float | None
+
+
+def _setup(bite: float, bow_force: float, bow_velocity: float,
+           t: float) -> tuple[float, float]:
+    """Bow speed (m/s, unsigned) and force (N) of the set-up at time ``t`` (s)."""
+    x = min(max(t - SETUP_BITE, 0.0) / SETUP_GLIDE, 1.0)
+    return min(SETUP_ACCELERATION * t, bow_velocity), bite * (bow_force / bite) ** x
+
+
+def reversal_speed(t: float, bow_velocity: float, acceleration: float) -> float:
+    """Signed bow speed (m/s) of a bow change at time ``t`` (s from the start of slowing).
+
+    Examples
+    --------
+    >>> [round(reversal_speed(t, 0.3, 10.0), 3) for t in (0.0, 0.02, 0.03, 0.05, 0.1)]
+    [0.3, 0.1, 0.0, -0.2, -0.3]
+    """
+    return float(np.clip(bow_velocity - acceleration * t, -bow_velocity, bow_velocity))
+
+
+def _play(instrument: str | InstrumentConstants, string: int, beta: float, seed: int,
+          duration: float, control: Callable[[Instrument, float], BowControl]
+          ) -> tuple[np.ndarray, float]:
+    """Slip onsets (s) over ``duration`` and the open string's nominal frequency (Hz)."""
+    inst = Instrument(instrument, seed=seed, body=None)
+    rate = inst.sample_rate
+    onsets = []
+    for k in range(int(np.ceil(duration * rate / HOP))):
+        block = inst.process(HOP, {string: control(inst, (k + 1) * HOP / rate)})
+        onsets.append(block.diagnostics[string].onset_times)
+    f0 = inst.voices[string].string.nominal_frequency(inst.constants.tuning_a4)
+    return np.concatenate(onsets), float(f0)
+
+
+def _measure(onsets: np.ndarray, before: float, after: float, change: float) -> NoteChange:
+    """Helmholtz motion before ``change`` at frequency ``before``; attack at ``after``."""
+    pre = onsets[(onsets >= change - CHECKED) & (onsets < change)]
+    ok = np.abs(np.diff(pre) * before - 1.0) < PERIOD_TOLERANCE
+    helm = bool(ok.size > 2 and ok.mean() >= 0.9)
+    post = onsets[(onsets >= change) & (onsets < change + LIMIT)]
+    good = np.abs(np.diff(post) * after - 1.0) < PERIOD_TOLERANCE
+    runs = np.convolve(good.astype(np.int64), np.ones(ATTACK_PERIODS, np.int64), "valid")
+    hits = np.flatnonzero(runs == ATTACK_PERIODS)
+    return NoteChange(helm, float(post[hits[0]] - change) if hits.size else None)
+
+
+def _check(bow_force: float, bow_velocity: float, beta: float) -> None:
+    if not (bow_force > 0.0 and bow_velocity > 0.0 and 0.0 < beta < 0.5):
+        raise ParameterError(f"need bow_force > 0 N, bow_velocity > 0 m/s and 0 < beta < 0.5;"
+                             f" got {bow_force}, {bow_velocity}, {beta}")
+
+
+def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force: float,
+               acceleration: float, bow_velocity: float = 0.3, beta: float = 0.1,
+               seed: int = 0) -> NoteChange:
+    """Turn the bow on a string in Helmholtz motion; how long until it is back.
+
+    Parameters
+    ----------
+    instrument : str or InstrumentConstants
+    string : int
+        String index, 0 = lowest.
+    bow_force : float, N
+        Held through the change.
+    acceleration : float, m/s^2
+        Of the slowing down and of the new stroke's start (the bow turns at
+        ``CHANGE_AT + bow_velocity / acceleration`` s).
+    bow_velocity : float, m/s
+        Speed before and after the change.
+    beta : float
+    seed : int
+
+    Returns
+    -------
+    NoteChange
+        Its attack timed from the reversal.
+    """
+    _check(bow_force, bow_velocity, beta)
+    if not acceleration > 0.0:
+        raise ParameterError(f"acceleration={acceleration} m/s^2 must be > 0")
+    turn = CHANGE_AT + bow_velocity / acceleration
+
+    def control(inst: Instrument, t: float) -> BowControl:
+        if t <= CHANGE_AT:
+            bite = inst.voices[string].string.reference_force
+            return BowControl(*_setup(bite, bow_force, bow_velocity, t), beta)
+        return BowControl(reversal_speed(t - CHANGE_AT, bow_velocity, acceleration),
+                          bow_force, beta)
+
+    onsets, f0 = _play(instrument, string, beta, seed, turn + LIMIT, control)
+    pre = _measure(onsets, f0, f0, CHANGE_AT)
+    return NoteChange(pre.helmholtz_before, _measure(onsets, f0, f0, turn).attack)
+
+
+def finger_change(instrument: str | InstrumentConstants, string: int, *, bow_force: float,
+                  semitones: float, bow_velocity: float = 0.3, beta: float = 0.1,
+                  seed: int = 0) -> NoteChange:
+    """Stop a string in Helmholtz motion higher, bow held; how long until it is back.
+
+    Parameters
+    ----------
+    instrument : str or InstrumentConstants
+    string : int
+    bow_force : float, N
+    semitones : float
+        Above the open string (the set-up bows the open string).
+    bow_velocity : float, m/s
+    beta : float
+        Of the effective length, before and after.
+    seed : int
+
+    Returns
+    -------
+    NoteChange
+        Its attack timed from :data:`CHANGE_AT` (the finger lands within the block that
+        ends after it: its ratio ramps over that block).
+    """
+    _check(bow_force, bow_velocity, beta)
+    ratio = float(finger_ratio(semitones))
+
+    def control(inst: Instrument, t: float) -> BowControl:
+        bite = inst.voices[string].string.reference_force
+        speed, force = _setup(bite, bow_force, bow_velocity, t)
+        return BowControl(speed, force, beta, ratio if t > CHANGE_AT else 0.0)
+
+    onsets, f0 = _play(instrument, string, beta, seed, CHANGE_AT + LIMIT, control)
+    pre = _measure(onsets, f0, f0, CHANGE_AT)
+    return NoteChange(pre.helmholtz_before,
+                      _measure(onsets, f0, f0 / (1.0 - ratio), CHANGE_AT).attack)
+
+
+__all__ = ["NoteChange", "bow_change", "finger_change", "reversal_speed"]
