@@ -110,6 +110,8 @@ def _measure(onsets: np.ndarray, before: float, after: float, change: float) -> 
     helm = bool(ok.size > 2 and ok.mean() >= 0.9)
     post = onsets[(onsets >= change) & (onsets < change + LIMIT)]
     good = np.abs(np.diff(post) * after - 1.0) < PERIOD_TOLERANCE
+    if good.size < ATTACK_PERIODS:
+        return NoteChange(helm, None)
     runs = np.convolve(good.astype(np.int64), np.ones(ATTACK_PERIODS, np.int64), "valid")
     hits = np.flatnonzero(runs == ATTACK_PERIODS)
     return NoteChange(helm, float(post[hits[0]] - change) if hits.size else None)

@@ -46,6 +46,11 @@ def test_no_attack_when_the_periods_never_settle():
     assert got.attack is None and got.helmholtz_before
 
 
+def test_a_silent_string_has_no_attack_and_no_helmholtz_motion():
+    got = nc._measure(np.array([0.1, 0.2]), 250.0, 250.0, 0.8)
+    assert got == nc.NoteChange(False, None)
+
+
 def test_a_slurred_finger_change_settles_within_50_ms():
     """Under a slur the string in Helmholtz motion takes the new length within a few
     periods (violin D string, 1 N, 2 semitones up: about 18 ms on this model)."""
