@@ -181,15 +181,15 @@ def test_note_contexts_and_failures_classify_each_note():
                            "string": [2, 2, 1, 1, 1], "dynamic": [5.0, 5.0, 7.0, 7.2, 7.2],
                            "n_strings": [1, 1, 2, 1, 1],
                            "run_position": ["init", "mid", "mid", "end", "iso"],
-                           "slurred": [False, False, True, False, False]})
+                           "bow_join": ["", "bow change", "legato", "bow restart", ""]})
     notes = [{"start": t} for t in (0.0, 0.51, 0.6, 0.61, 1.2, 2.0)]
     assert note_contexts(notes, events) == [
         ["attack"], ["bow change", "short note"],
-        ["slurred", "string crossing", "double stop", "dynamic change"],
-        ["slurred", "string crossing", "double stop", "dynamic change"], ["bow change"],
+        ["legato", "string crossing", "double stop", "dynamic change"],
+        ["legato", "string crossing", "double stop", "dynamic change"], ["bow restart"],
         ["attack"]]
-    # events without the stroke column (an older table): no bow-change tags, "other"
-    assert note_contexts(notes[4:5], events.drop(columns="slurred")) == [["other"]]
+    # events without the bowing column (an older table): no bow tags, "other"
+    assert note_contexts(notes[4:5], events.drop(columns="bow_join")) == [["other"]]
     ok = _note(0.95, 20, 30.0, 20, 0)
     assert note_failures(ok) == []
     assert note_failures(_note(0.5, 20, float("nan"), 2, 10)) == ["slow attack", "unsteady",
@@ -237,3 +237,20 @@ def test_an_excerpt_one_method_cannot_play_is_left_out_for_every_method():
     assert r["verdict"].endswith("(y left out, b: no bowed notes; c not compared: no models).")
     assert r["why"]["a"]["notes"] == 8  # only excerpt x's notes, 4 per seed
     assert list(r["excerpts"]["y"]["summary"]) == ["a"]
+
+
+def test_bow_joins_tell_a_new_stroke_from_a_stop_and_from_legato():
+    from pipelines.perform.events import Event, events_table
+
+    def ev(t0, direction, cont=False, stop=False, pizz=False):
+        return Event(rows=[0], t0=t0, end=t0 + 0.2, strings=[2], semitones=[0.0],
+                     dynamic=5.0, label="A4", played_end=t0 + 0.2, direction=direction,
+                     cont=cont, stop=stop, pizz=pizz)
+
+    events = [ev(0.0, 1), ev(0.2, -1), ev(0.4, -1, cont=True, stop=True),
+              ev(0.6, -1, cont=True), ev(0.8, -1, cont=True), ev(1.0, 1, cont=True),
+              ev(1.2, 0, pizz=True), ev(1.4, 1)]
+    table = events_table(events, pd.DataFrame({"measure": [1]}))
+    # the third note follows a legato note (not stopped); the fourth follows a stopped one
+    assert table["bow_join"].tolist() == ["", "bow change", "legato", "bow restart", "legato",
+                                          "bow change", "", ""]

@@ -75,7 +75,7 @@ class Performance:
     events : pandas.DataFrame
         One row per played event: ``t0``, ``played_end``, ``end`` (s), ``label`` (note
         names), ``direction`` (+1 down, -1 up, 0 pizz), ``string``, ``dynamic``,
-        ``measure``, ``n_strings``, ``run_position``, ``slurred``, ``goal_lufs``
+        ``measure``, ``n_strings``, ``run_position``, ``bow_join``, ``goal_lufs``
         (:func:`events_table`).
     warnings : list of str
         Things the rules could not do as written (rolled chords, squeezed strokes).
@@ -86,10 +86,27 @@ class Performance:
     warnings: list[str]
 
 
-def _slurred(events: list[Event]) -> list[bool]:
-    """Per event: bowed in the same stroke as the event before it (no bow change)."""
-    return [k > 0 and e.cont and not e.pizz and not events[k - 1].pizz
-            and events[k - 1].direction == e.direction for k, e in enumerate(events)]
+#: How an event's bowing joins the event before (``bow_join`` of :func:`events_table`).
+BOW_JOINS = ("bow change", "bow restart", "legato", "")
+
+
+def _bow_joins(events: list[Event]) -> list[str]:
+    """Per event, how its bowing joins the event before (one of :data:`BOW_JOINS`).
+
+    A new stroke; the same stroke after the bow stopped (the note before was shortened:
+    portato or staccato under a slur); the same stroke with the bow moving; or "" (the
+    first event, a pizzicato or the event after one).
+    """
+    out = []
+    for k, e in enumerate(events):
+        prev = events[k - 1] if k else None
+        if prev is None or e.pizz or prev.pizz:
+            out.append("")
+        elif not (e.cont and prev.direction == e.direction):
+            out.append("bow change")
+        else:
+            out.append("bow restart" if prev.stop else "legato")
+    return out
 
 
 def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
@@ -108,8 +125,8 @@ def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
         ``t0``, ``played_end``, ``end`` (s), ``label``, ``direction`` (+1 down, -1 up,
         0 pizz), ``string`` (the top one), ``dynamic``, ``measure`` (of the event's first
         note), ``n_strings`` (2 or more: a double stop or chord), ``run_position``,
-        ``slurred`` (True: played in the same bow stroke as the event before, no bow
-        change), ``goal_lufs`` (LUFS, :attr:`Event.goal_lufs`), ``phrase_db`` (dB,
+        ``bow_join`` (how its bowing joins the event before: :data:`BOW_JOINS`),
+        ``goal_lufs`` (LUFS, :attr:`Event.goal_lufs`), ``phrase_db`` (dB,
         :attr:`Event.phrase_db`).
 
     Examples
@@ -129,6 +146,6 @@ def events_table(events: list[Event], notes: pd.DataFrame) -> pd.DataFrame:
         "measure": [int(measure[e.rows[0]]) for e in events],
         "n_strings": [len(e.strings) for e in events],
         "run_position": [e.run_position for e in events],
-        "slurred": _slurred(events),
+        "bow_join": _bow_joins(events),
         "goal_lufs": [e.goal_lufs for e in events],
         "phrase_db": [e.phrase_db for e in events]})

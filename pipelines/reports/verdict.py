@@ -8,10 +8,11 @@ classifies every evaluated note of every render:
   hops are not steadily in Helmholtz motion (share below :data:`HELMHOLTZ`) or too many
   of them sound like no violin (class 5 above :data:`CLASS5`);
 - its *context*, from the played events: ``attack`` (it starts from silence: the first
-  note, or the first of a run after a rest); else ``bow change`` (a new stroke) or
-  ``slurred`` (in the same stroke as the note before: a finger change or a crossing under
-  a slur), and ``string crossing`` (on another string than the note before, without a
-  rest between); ``short note`` (played for less than :data:`SHORT_S`), ``double stop``
+  note, or the first of a run after a rest); else how the bowing joins the note before
+  (``bow change``: a new stroke; ``bow restart``: the same stroke after the bow stopped,
+  as in portato; ``legato``: the same stroke with the bow moving, a finger change or a
+  crossing under a slur) and ``string crossing`` (on another string than the note before,
+  without a rest between); ``short note`` (played for less than :data:`SHORT_S`), ``double stop``
   (two or more strings at once) and ``dynamic change`` (at least :data:`DYNAMIC_STEP`
   dynamic levels from the note before). A note may have several contexts, or none
   (``other``: events without the stroke information).
@@ -41,8 +42,8 @@ SHORT_S = 0.15
 DYNAMIC_STEP = 1.0
 #: A note belongs to the last event starting at most this long after it, s.
 MATCH_S = 0.02
-CONTEXTS = ("attack", "bow change", "slurred", "string crossing", "short note",
-            "double stop", "dynamic change", "other")
+CONTEXTS = ("attack", "bow change", "bow restart", "legato", "string crossing",
+            "short note", "double stop", "dynamic change", "other")
 FAILURES = ("slow attack", "unsteady", "class 5")
 
 
@@ -130,12 +131,12 @@ def note_contexts(notes: Sequence[dict[str, Any]], events: pd.DataFrame) -> list
     >>> ev = pd.DataFrame({"t0": [0.0, 0.5, 0.6], "played_end": [0.45, 0.58, 1.0],
     ...                    "string": [2, 2, 1], "dynamic": [5.0, 5.0, 7.0],
     ...                    "n_strings": [1, 1, 2], "run_position": ["init", "mid", "end"],
-    ...                    "slurred": [False, False, True]})
+    ...                    "bow_join": ["", "bow change", "legato"]})
     >>> for tags in note_contexts([{"start": 0.0}, {"start": 0.5}, {"start": 0.61}], ev):
     ...     print(tags)
     ['attack']
     ['bow change', 'short note']
-    ['slurred', 'string crossing', 'double stop', 'dynamic change']
+    ['legato', 'string crossing', 'double stop', 'dynamic change']
     """
     if not len(events):
         return [["other"] for _ in notes]
@@ -147,8 +148,8 @@ def note_contexts(notes: Sequence[dict[str, Any]], events: pd.DataFrame) -> list
         if prev is None or str(e["run_position"]) in ("init", "iso"):
             tags.append("attack")
         else:
-            if "slurred" in e.index:
-                tags.append("slurred" if bool(e["slurred"]) else "bow change")
+            if str(e.get("bow_join", "")) in CONTEXTS:
+                tags.append(str(e["bow_join"]))
             if int(e["string"]) != int(prev["string"]):
                 tags.append("string crossing")
         if float(e["played_end"]) - float(e["t0"]) < SHORT_S:
