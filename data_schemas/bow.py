@@ -100,21 +100,6 @@ class BowBudget:
         """The positions inside the margins, ``(margin, 1 - margin)``."""
         return self.margin, 1.0 - self.margin
 
-    def place(self, position: float, travel: float, direction: int) -> float:
-        """Move a start (during a retake) just enough for a stroke to fit.
-
-        Parameters
-        ----------
-        position : float
-            Where the bow is (share of the hair from the frog).
-        travel : float, share of the hair
-            Unsigned travel of the next stroke.
-        direction : int
-            +1 down-bow (towards the tip), -1 up-bow.
-        """
-        lo, hi = self.start_window(np.array([0.0, direction * travel]))
-        return min(position, max(lo, hi)) if direction > 0 else max(position, min(lo, hi))
-
     def home(self, direction: int) -> float:
         """Where a stroke in ``direction`` (+1 down-bow, -1 up-bow) starts on a fresh bow."""
         return self.margin if direction > 0 else 1.0 - self.margin
