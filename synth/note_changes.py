@@ -147,6 +147,12 @@ def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force:
     -------
     NoteChange
         Its attack timed from the reversal.
+
+    Examples
+    --------
+    >>> c = bow_change("violin", 1, bow_force=2.0, acceleration=20.0)
+    >>> c.helmholtz_before, c.attack is None or c.attack > 0.005
+    (True, True)
     """
     _check(bow_force, bow_velocity, beta)
     if not acceleration > 0.0:
