@@ -127,8 +127,9 @@ def plot(rows: list[dict], path: Path) -> Path:
         names = [st.name for st in load_instrument(name).strings]
         ax.set_yticks(range(len(keys)), [f"{names[s]} string, {f:g} N" for s, f in keys])
         ax.axvline(len(ACCELERATIONS) - 0.5, color="w", lw=2)
-        ax.set_title(f"{name}: attack after the change (ms; bow: m/s^2; white: set-up "
-                     "not in Helmholtz motion)", fontsize=9)
+        ax.set_title(name)
+    fig.suptitle("Attack after the change, ms (bow: the turn's m/s^2; finger: semitones up; "
+                 "white: the set-up never reached Helmholtz motion)")
     fig.colorbar(im, ax=axes, label="ms to 5 regular periods (500: not within 400 ms)")
     fig.savefig(path, dpi=100)
     plt.close(fig)
