@@ -1,6 +1,6 @@
 """Where the attacks of real music go: bow changes against finger changes, every string.
 
-    python bench/bow_change.py --json [--plot PNG] [--strings TOML] [--workers 2]
+    python bench/bow_change.py --json [--plot PNG] [--strings TOML] [--workers 2] [--music]
 
 On a string in Helmholtz motion (set up as a player would; :mod:`synth.note_changes`),
 times how long the next note takes to be in Helmholtz motion again:
@@ -18,7 +18,14 @@ than any; None when over half are not reached) and the share of changes back wit
 (the issue's attack p90 target; a listener accepts "creaky" pre-Helmholtz transients up to
 about 50 ms). ``--plot`` draws
 one panel per instrument: attack per string x force x acceleration, finger changes beside.
-About 40 s on two cores.
+About 20 s on two cores.
+
+``--music`` also renders the rules' tuning set (:data:`MUSIC`: Mozart K. 421 and Haydn
+op. 76/2 and op. 74/1, m. 1-8, all four parts; the OpenScore files from
+``$ARCO_SHARED_DATA`` or ``../shared/data``) with the slip record, and reports its notes'
+attacks by how each note's bowing joins the note before (the comparison's contexts,
+:func:`pipelines.reports.verdict.note_contexts`): from silence, bow change, bow restart,
+legato on one string, legato onto another string. About 5 minutes more.
 """
 
 from __future__ import annotations
@@ -42,6 +49,14 @@ ACCELERATIONS = (5.0, 10.0, 20.0, 50.0)
 SEMITONES = (2.0, 5.0)
 #: An attack back within this counts as quick, s.
 QUICK = 0.05
+#: The rules' tuning set (score, first and last measure), all four parts.
+MUSIC = (("pipelines/data/mozart-k421.mxl", 1, 8),
+         ("openscore-quartets/Haydn-Joseph-String-Quartet-in-D-minor-Hob.III76-Op.76-No.2"
+          "-sq12772795.mxl", 1, 8),
+         ("openscore-quartets/Haydn-Joseph-String-Quartet-in-C-major-Hob.III72-Op.74-No.1"
+          "-sq10372717.mxl", 1, 8))
+#: How a note starts, from its contexts, in the order they are looked for.
+JOINS = ("attack", "bow change", "bow restart", "legato")
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -51,7 +66,67 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--strings", metavar="TOML", help="string physics to measure instead")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--music", action="store_true",
+                   help="also the rules' tuning set, attacks by bowing join (~5 min)")
     return p.parse_args(argv)
+
+
+def _score_path(rel: str) -> Path | None:
+    import os
+
+    if rel.startswith("pipelines/"):
+        return ROOT / rel
+    shared = Path(os.environ.get("ARCO_SHARED_DATA", ROOT.parent / "shared" / "data"))
+    path = shared / rel
+    return path if path.exists() else None
+
+
+def music_part(task: tuple) -> list[dict]:
+    """Rules render of one part with the slip record: per note, its join and attack."""
+    from pipelines.listening.evaluate import evaluate
+    from pipelines.methods.render import render_score
+    from pipelines.reports.verdict import note_contexts
+
+    path, part, first, last, seed = task
+    p = render_score(str(path), method="rules", parts=part, start_measure=first,
+                     end_measure=last, diagnostics=True, seed=seed).parts[0]
+    ev = evaluate(p.audio, p.actions, diagnostics=p.diagnostics, instrument=p.instrument)
+    events = p.events.sort_values("t0", kind="stable").reset_index(drop=True)
+    out = []
+    for n, tags in zip(ev["notes"], note_contexts(ev["notes"], events), strict=True):
+        if n["double_stop_attack"] or n["string"] < 0:
+            continue
+        join = next((j for j in JOINS if j in tags), "other")
+        if join == "legato" and "string crossing" in tags:
+            join = "legato onto another string"
+        out.append({"instrument": p.instrument, "join": join,
+                    "attack_ms": n["attack_ms"] if np.isfinite(n["attack_ms"]) else None})
+    return out
+
+
+def music(workers: int, seed: int) -> dict:
+    """The tuning set's attacks per bowing join (median, p90, quick share, never)."""
+    todo = [(path, part, a, b, seed) for rel, a, b in MUSIC
+            if (path := _score_path(rel)) is not None for part in range(4)]
+    with ProcessPoolExecutor(max(workers, 1)) as pool:
+        notes = [n for rows in pool.map(music_part, todo) for n in rows]
+    out = {"excerpts": len(todo) // 4, "notes": len(notes)}
+    for join in (*JOINS, "legato onto another string", "other"):
+        ms = np.array([np.inf if n["attack_ms"] is None else n["attack_ms"] for n in notes
+                       if n["join"] == join])
+        if not ms.size:
+            continue
+        finite = np.isfinite(np.percentile(ms, 90))
+        out[join] = {"notes": int(ms.size), "attack_ms_median": _finite(np.median(ms)),
+                     "attack_ms_p90": round(float(np.percentile(ms, 90)), 1) if finite
+                     else None,
+                     "quick_share": round(float(np.mean(ms <= 1000 * QUICK)), 3),
+                     "never": int(np.sum(~np.isfinite(ms)))}
+    return out
+
+
+def _finite(x: float) -> float | None:
+    return round(float(x), 1) if np.isfinite(x) else None
 
 
 def tasks(strings: str | None, seed: int) -> list[tuple]:
@@ -150,12 +225,17 @@ def main(argv: list[str] | None = None) -> dict:
               "seconds": round(time.perf_counter() - start, 1)}
     if args.plot:
         report["plot"] = str(plot(rows, args.plot))
+    if args.music:
+        report["music"] = music(args.workers, args.seed)
+        report["seconds"] = round(time.perf_counter() - start, 1)
     if args.json:
         print(json.dumps(report))
     else:
         for name, kinds in report["summary"].items():
             for kind, s in kinds.items():
                 print(f"{name:6s} {kind:14s} {s}")
+        for join, s in report.get("music", {}).items():
+            print(f"music  {join:28s} {s}")
     return report
 
 
