@@ -103,18 +103,24 @@ def _play(instrument: str | InstrumentConstants, string: int, beta: float, seed:
     return np.concatenate(onsets), float(f0)
 
 
-def _measure(onsets: np.ndarray, before: float, after: float, change: float) -> NoteChange:
-    """Helmholtz motion before ``change`` at frequency ``before``; attack at ``after``."""
+def _measure(onsets: np.ndarray, before: float, after: float, change: float,
+             attack_from: float | None = None) -> NoteChange:
+    """Helmholtz motion before ``change``, and the attack from ``attack_from``.
+
+    ``before`` and ``after`` are the nominal frequencies (Hz) before and after the change;
+    ``attack_from`` (s) defaults to ``change``.
+    """
     pre = onsets[(onsets >= change - CHECKED) & (onsets < change)]
     ok = np.abs(np.diff(pre) * before - 1.0) < PERIOD_TOLERANCE
     helm = bool(ok.size > 2 and ok.mean() >= 0.9)
-    post = onsets[(onsets >= change) & (onsets < change + LIMIT)]
+    start = change if attack_from is None else attack_from
+    post = onsets[(onsets >= start) & (onsets < start + LIMIT)]
     good = np.abs(np.diff(post) * after - 1.0) < PERIOD_TOLERANCE
     if good.size < ATTACK_PERIODS:
         return NoteChange(helm, None)
     runs = np.convolve(good.astype(np.int64), np.ones(ATTACK_PERIODS, np.int64), "valid")
     hits = np.flatnonzero(runs == ATTACK_PERIODS)
-    return NoteChange(helm, float(post[hits[0]] - change) if hits.size else None)
+    return NoteChange(helm, float(post[hits[0]] - start) if hits.size else None)
 
 
 def _check(bow_force: float, bow_velocity: float, beta: float) -> None:
@@ -167,8 +173,7 @@ def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force:
                           bow_force, beta)
 
     onsets, f0 = _play(instrument, string, beta, seed, turn + LIMIT, control)
-    pre = _measure(onsets, f0, f0, CHANGE_AT)
-    return NoteChange(pre.helmholtz_before, _measure(onsets, f0, f0, turn).attack)
+    return _measure(onsets, f0, f0, CHANGE_AT, turn)
 
 
 def finger_change(instrument: str | InstrumentConstants, string: int, *, bow_force: float,
@@ -203,9 +208,7 @@ def finger_change(instrument: str | InstrumentConstants, string: int, *, bow_for
         return BowControl(speed, force, beta, ratio if t > CHANGE_AT else 0.0)
 
     onsets, f0 = _play(instrument, string, beta, seed, CHANGE_AT + LIMIT, control)
-    pre = _measure(onsets, f0, f0, CHANGE_AT)
-    return NoteChange(pre.helmholtz_before,
-                      _measure(onsets, f0, f0 / (1.0 - ratio), CHANGE_AT).attack)
+    return _measure(onsets, f0, f0 / (1.0 - ratio), CHANGE_AT)
 
 
 __all__ = ["NoteChange", "bow_change", "finger_change", "reversal_speed"]
