@@ -82,6 +82,11 @@ SAMPLE_CHOICES = TableSpec(
                "Unweighted Mahalanobis distance between predicted and sample features, divided "
                "by the square root of the feature dimension.",
                minimum=0.0),
+        Column("force_factor", pa.float64(), "1",
+               "Factor applied to the sample's bow force to bring the note into the "
+               "instrument model's playable space (pipelines.methods.playable; 1 = as "
+               "sampled). Absent before the transform.",
+               minimum=0.0, exclusive_minimum=True, nullable=True, required=False),
     ),
 )
 

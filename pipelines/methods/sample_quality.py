@@ -81,6 +81,7 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
     from data_schemas.instruments import instrument_facts
     from gesture_db.assemble import assemble_actions
     from pipelines.listening.evaluate import evaluate
+    from pipelines.methods.playable import to_playable
     from pipelines.methods.sampling_db import adapt_forces
     from synth.render import render_with_diagnostics
 
@@ -89,6 +90,7 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
                                bow_length=instrument_facts(instrument).bow_length)
     actions = adapt_forces(actions, instrument, database.search_config,
                            sampled_from=instrument)
+    actions, _ = to_playable(actions, targets, choices, instrument, database.search_config)
     audio, diag = render_with_diagnostics(actions, instrument=instrument, engine="modal",
                                           sample_rate=sample_rate, seed=seed)
     found = evaluate(audio, actions, sample_rate=sample_rate, diagnostics=diag,

@@ -213,6 +213,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     """
     from gesture_db.assemble import assemble_actions
     from gesture_db.search import search
+    from pipelines.methods.playable import to_playable
     from pipelines.perform.ear import correct_by_ear
     from pipelines.perform.phrasing import assign_phrasing, phrase_marks
     from pipelines.perform.rules import prepare_events
@@ -231,13 +232,15 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     actions = assemble_actions(targets, result.choices, database.contours,
                                bow_length=instrument_facts(_name).bow_length)
     actions = adapt_forces(actions, _name, database.search_config, sampled_from=source)
-    actions, hand_warnings = play_left_hand(actions, targets, result.choices, bowed,
+    actions, choices = to_playable(actions, targets, result.choices, _name,
+                                   database.search_config)
+    actions, hand_warnings = play_left_hand(actions, targets, choices, bowed,
                                             database.left_hand, config)
     actions = _touches(_extra_rows(actions, events), events)
     warnings = ([transfer] if transfer else []) + hand_warnings
     warnings += [f"note group {g} is not in the database; sampled from {r}"
                  for g, r in sorted(result.fallbacks.items())]
-    return Performance(actions, events_table(events, notes), warnings), targets, result.choices
+    return Performance(actions, events_table(events, notes), warnings), targets, choices
 
 
 def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingDatabase,

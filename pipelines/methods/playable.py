@@ -1,0 +1,203 @@
+"""Sampled gestures brought into the instrument model's playable space (Maestre et al. 2010).
+
+A sample keeps its recorded contours when it is stretched and joined, but the note it plays
+may ask for a slower bow (a longer note: the bow-length budget scales the velocity down) or
+come from a performer who pressed harder at soft dynamics than this model's strings allow.
+Pressed far above the middle of its Helmholtz window the modal string sounds flat and
+raucous; far below, it slips several times a period. Maestre et al. name the remedy as a
+post-processing step: transform the samples so that the resulting signals stay within the
+limits of the playable space. Here each sampled note's bow force is scaled, as a whole
+(its contour's shape kept), so that its sustained force lies within ``band`` times the
+middle of the string's window at the note's own bow velocity and beta:
+
+    F_mid = F_ref (|v| / 0.3 m/s) (0.1 / beta)^1.5
+
+with ``F_ref`` the string's reference force (the window's middle at 0.3 m/s and beta 0.1,
+``synth/config/strings.toml``). The window's edges scale as F_min ~ v / beta^2 and F_max ~
+v / beta, so F_mid is their geometric middle at any bowing; the rules' bow lanes sit on it
+at every dynamic (``data_schemas/config/instruments.toml``). The factor applied to each note
+is recorded (the ``force_factor`` column of the sample choices).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from data_schemas.actions import ACTIONS
+from data_schemas.errors import ParameterError
+
+#: Frames whose bow speed is at least this share of the note's fastest are its sustained
+#: part, on which the note's force ratio is measured.
+SUSTAIN_SHARE = 0.5
+#: A note's force is scaled by no more than this factor either way.
+MAX_FACTOR = 4.0
+#: Neighbouring notes' factors are blended over this time (s), so a slur's force stays
+#: continuous across a finger change.
+BLEND = 0.03
+
+
+def window_middle(reference_force: np.ndarray | float, bow_velocity: np.ndarray | float,
+                  beta: np.ndarray | float) -> np.ndarray:
+    """Middle of a string's Helmholtz window at a bowing, N.
+
+    Parameters
+    ----------
+    reference_force : float or np.ndarray, N
+        The string's reference force (window middle at 0.3 m/s and beta 0.1).
+    bow_velocity : float or np.ndarray, m/s
+        Signed or not; its magnitude counts (floored at 1 mm/s).
+    beta : float or np.ndarray
+        Bow-bridge distance / effective string length (floored at 0.001).
+
+    Returns
+    -------
+    np.ndarray, N
+        ``F_ref (|v| / 0.3) (0.1 / beta)^1.5``, broadcast over the inputs.
+
+    Examples
+    --------
+    >>> float(window_middle(1.5, 0.3, 0.1))
+    1.5
+    >>> round(float(window_middle(1.0, -0.62, 0.08)), 3)   # the ffff lane's 2.89 x F_ref
+    2.888
+    """
+    v = np.maximum(np.abs(np.asarray(bow_velocity, np.float64)), 1e-3)
+    b = np.maximum(np.asarray(beta, np.float64), 1e-3)
+    return np.asarray(reference_force, np.float64) * (v / 0.3) * (0.1 / b) ** 1.5
+
+
+def _note_of_rows(actions: pd.DataFrame, targets: pd.DataFrame) -> np.ndarray:
+    """Target index of each bowed row (-1: before the first target, a lift or a pluck)."""
+    onset = targets["onset"].to_numpy(np.float64)
+    end = onset + targets["duration"].to_numpy(np.float64)
+    t = actions["time"].to_numpy(np.float64)
+    note = np.searchsorted(onset, t, side="right") - 1
+    inside = (note >= 0) & (t < end[np.maximum(note, 0)] + 1e-9)
+    bowed = ~actions["pluck"].to_numpy(bool) & (actions["bow_force"].to_numpy() > 0)
+    return np.where(inside & bowed, note, -1)
+
+
+def note_force_factors(actions: pd.DataFrame, targets: pd.DataFrame,
+                       reference_forces: np.ndarray, band: float) -> np.ndarray:
+    """The force factor that brings each target note into the playable band.
+
+    Parameters
+    ----------
+    actions : pandas.DataFrame
+        Assembled actions (:data:`data_schemas.actions.ACTIONS`) of one part.
+    targets : pandas.DataFrame
+        The sampling targets (:data:`data_schemas.sampling.SAMPLING_TARGETS`).
+    reference_forces : np.ndarray [shape=(4,)], N
+        Reference force of each string of the instrument model.
+    band : float
+        Allowed ratio (>= 1) of a note's sustained force to :func:`window_middle`, either
+        way.
+
+    Returns
+    -------
+    np.ndarray [shape=(len(targets),)]
+        ``clip(q, 1 / band, band) / q`` with ``q`` the median ratio over the note's sustained
+        frames, limited to ``[1 / MAX_FACTOR, MAX_FACTOR]``; 1 for notes without frames.
+
+    Raises
+    ------
+    ParameterError
+        ``band`` below 1 or not a number.
+    """
+    if not band >= 1.0:
+        raise ParameterError(f"playable band={band!r} must be a ratio >= 1")
+    note = _note_of_rows(actions, targets)
+    v = np.abs(actions["bow_velocity"].to_numpy(np.float64))
+    ratio = actions["bow_force"].to_numpy(np.float64) / window_middle(
+        np.asarray(reference_forces)[actions["string"].to_numpy(int)], v,
+        actions["beta"].to_numpy(np.float64))
+    factors = np.ones(len(targets))
+    for m in np.unique(note[note >= 0]):
+        rows = note == m
+        sustained = v[rows] >= SUSTAIN_SHARE * v[rows].max()
+        q = float(np.median(ratio[rows][sustained]))
+        if q > 0:
+            factors[m] = np.clip(np.clip(q, 1.0 / band, band) / q, 1.0 / MAX_FACTOR, MAX_FACTOR)
+    return factors
+
+
+def _blended(times: np.ndarray, values: np.ndarray, counted: np.ndarray,
+             width: float) -> np.ndarray:
+    """Mean of the counted ``values`` within ``width / 2`` of each row's time (sorted times).
+
+    Rows with no counted row near them keep their own value.
+    """
+    csum = np.r_[0.0, np.cumsum(np.where(counted, values, 0.0))]
+    count = np.r_[0, np.cumsum(counted)]
+    lo = np.searchsorted(times, times - width / 2, side="left")
+    hi = np.searchsorted(times, times + width / 2, side="right")
+    n = count[hi] - count[lo]
+    return np.where(n > 0, (csum[hi] - csum[lo]) / np.maximum(n, 1), values)
+
+
+def into_playable(actions: pd.DataFrame, targets: pd.DataFrame, reference_forces: np.ndarray,
+                  band: float) -> tuple[pd.DataFrame, np.ndarray]:
+    """Scale each sampled note's bow force into the playable band.
+
+    Parameters
+    ----------
+    actions, targets, reference_forces, band
+        As for :func:`note_force_factors`; ``actions`` sorted by time.
+
+    Returns
+    -------
+    actions : pandas.DataFrame
+        A copy whose bowed rows carry the scaled force (blended over :data:`BLEND` s
+        between notes; clipped to the actions table's maximum); plucks and lifts untouched.
+    factors : np.ndarray [shape=(len(targets),)]
+        The factor of each target note (1 = untouched).
+
+    Examples
+    --------
+    >>> t = np.arange(0.0, 1.0, 1 / 240)
+    >>> acts = pd.DataFrame({"time": t, "string": 1, "bow_velocity": 0.3, "beta": 0.1,
+    ...                      "bow_force": 4.5, "pluck": False})
+    >>> tgt = pd.DataFrame({"onset": [0.0], "duration": [1.0]})
+    >>> out, f = into_playable(acts, tgt, np.array([1.5, 1.5, 0.5, 0.5]), 1.5)
+    >>> round(float(f[0]), 3), round(float(out["bow_force"].iloc[120]), 3)
+    (0.5, 2.25)
+    """
+    factors = note_force_factors(actions, targets, reference_forces, band)
+    out = actions.copy()
+    if np.all(factors == 1.0):
+        return out, factors
+    note = _note_of_rows(actions, targets)
+    rows = note >= 0
+    per_row = np.where(rows, factors[np.maximum(note, 0)], 1.0)
+    times = actions["time"].to_numpy(np.float64)
+    order = np.argsort(times, kind="stable")
+    blended = np.empty_like(per_row)
+    blended[order] = _blended(times[order], per_row[order], rows[order], BLEND)
+    force = actions["bow_force"].to_numpy(np.float64)
+    out["bow_force"] = np.where(rows, np.clip(force * blended, 0.0,
+                                              ACTIONS.column("bow_force").maximum), force)
+    return out, factors
+
+
+def to_playable(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.DataFrame,
+                instrument: str, search_config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """:func:`into_playable` with the search settings' ``[render] playable_band``.
+
+    Returns the transformed actions and a copy of ``choices`` with the ``force_factor`` of
+    each note (all 1 when the band is 0: the transform is off).
+    """
+    from pipelines.perform.rules import string_force_factors
+
+    band = float(search_config.get("render", {}).get("playable_band", 0.0))
+    choices = choices.copy()
+    if band == 0.0:
+        choices["force_factor"] = 1.0
+        return actions, choices
+    actions, factors = into_playable(actions, targets, string_force_factors(instrument), band)
+    choices["force_factor"] = factors[choices["target_index"].to_numpy(int)]
+    return actions, choices
+
+
+__all__ = ["BLEND", "MAX_FACTOR", "SUSTAIN_SHARE", "into_playable", "note_force_factors",
+           "to_playable", "window_middle"]
