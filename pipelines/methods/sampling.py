@@ -382,10 +382,15 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
 
     The single integration point with :mod:`synth.listening.controller`: the hop plan of the
     sampled actions comes from :func:`pipelines.methods.feedback.hop_plan`; per string a
-    controller (:func:`synth.listening.controller.play_plan` with ``planned_force``, no range
-    clamp) holds a correction factor that starts at 1 on every stroke and is multiplied by
-    ``K**(3 - c_avg)`` from the classes it hears; the force played is the sampled force
-    times that factor (clipped to 0..50 N).
+    controller (:func:`synth.listening.controller.play_plan` with ``planned_force``) holds a
+    correction factor that starts at 1 on every stroke and is multiplied by ``K**(3 - c_avg)``
+    from the classes it hears; the force played is the sampled force times that factor
+    (clipped to 0..50 N). The control law is pure feedback's
+    (:data:`pipelines.methods.feedback.FEEDBACK_SETTINGS`: the factor within 1/1.5..1.5,
+    moving only while one side holds 85 % of the class probabilities). Unbounded, as
+    before, it undid much of the playable-space transform: on the rules' tuning set
+    (K. 421, Haydn op. 76/2 and op. 74/1, m. 1-8, four parts, seed 0) Helmholtz share
+    0.815 and class 3 0.598 against 0.842 and 0.666 with this law.
 
     Parameters
     ----------
@@ -408,11 +413,17 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     diagnostics : pandas.DataFrame
         Contact diagnostics per hop per string.
     """
-    from pipelines.methods.feedback import TAIL, diagnostics_table, hop_plan, played_actions
+    from pipelines.methods.feedback import (
+        FEEDBACK_SETTINGS,
+        TAIL,
+        diagnostics_table,
+        hop_plan,
+        played_actions,
+    )
     from pipelines.perform.config import load_config
     from synth.engines import get_engine
     from synth.listening.classifier import load_models
-    from synth.listening.controller import ControllerSettings, play_plan
+    from synth.listening.controller import play_plan
     from synth.listening.features import HOP
 
     if sample_rate not in (44100, 48000):
@@ -439,7 +450,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     plan = dataclasses.replace(plan, target_speed=target_speed)
     inst = get_engine(engine, instrument, sample_rate=sample_rate, seed=seed)
     log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 2]),
-                    settings=ControllerSettings(range_margin=0.0), record_diagnostics=True,
+                    settings=FEEDBACK_SETTINGS, record_diagnostics=True,
                     planned_force=sampled)
     tail = inst.process(int(TAIL * sample_rate), {}).audio
     played = played_actions(perf, plan, span, log, sample_rate=sample_rate)
