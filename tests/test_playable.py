@@ -95,6 +95,13 @@ def test_the_sustained_part_decides_not_the_bow_change():
     assert factors[0] == 1.0
 
 
+def test_a_resting_bow_is_left_alone():
+    actions, targets = _part([(0.5, 1, 0.0, 0.1, 3.0)])
+    out, factors = into_playable(actions, targets, REFS, 1.5)
+    assert factors[0] == 1.0
+    np.testing.assert_array_equal(out["bow_force"].to_numpy(), actions["bow_force"].to_numpy())
+
+
 def test_plucks_and_lifts_untouched():
     actions, targets = _part([(0.5, 1, 0.3, 0.1, 6.0)])
     extra = pd.DataFrame({"time": [0.6, 0.7], "string": 1, "bow_velocity": 0.0, "beta": 0.1,

@@ -30,6 +30,9 @@ from data_schemas.errors import ParameterError
 #: Frames whose bow speed is at least this share of the note's fastest are its sustained
 #: part, on which the note's force ratio is measured.
 SUSTAIN_SHARE = 0.5
+#: A note whose bow never moves faster than this (m/s) is left as sampled (a bow resting
+#: on the string has no window to be in).
+MOVING = 0.01
 #: A note's force is scaled by no more than this factor either way.
 MAX_FACTOR = 4.0
 #: Neighbouring notes' factors are blended over this time (s), so a slur's force stays
@@ -98,7 +101,8 @@ def note_force_factors(actions: pd.DataFrame, targets: pd.DataFrame,
     -------
     np.ndarray [shape=(len(targets),)]
         ``clip(q, 1 / band, band) / q`` with ``q`` the median ratio over the note's sustained
-        frames, limited to ``[1 / MAX_FACTOR, MAX_FACTOR]``; 1 for notes without frames.
+        frames, limited to ``[1 / MAX_FACTOR, MAX_FACTOR]``; 1 for notes without frames or
+        whose bow stays below :data:`MOVING`.
 
     Raises
     ------
@@ -115,6 +119,8 @@ def note_force_factors(actions: pd.DataFrame, targets: pd.DataFrame,
     factors = np.ones(len(targets))
     for m in np.unique(note[note >= 0]):
         rows = note == m
+        if v[rows].max() < MOVING:
+            continue
         sustained = v[rows] >= SUSTAIN_SHARE * v[rows].max()
         q = float(np.median(ratio[rows][sustained]))
         if q > 0:
@@ -199,5 +205,5 @@ def to_playable(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.DataFr
     return actions, choices
 
 
-__all__ = ["BLEND", "MAX_FACTOR", "SUSTAIN_SHARE", "into_playable", "note_force_factors",
+__all__ = ["BLEND", "MAX_FACTOR", "MOVING", "SUSTAIN_SHARE", "into_playable", "note_force_factors",
            "to_playable", "window_middle"]
