@@ -385,12 +385,9 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     controller (:func:`synth.listening.controller.play_plan` with ``planned_force``) holds a
     correction factor that starts at 1 on every stroke and is multiplied by ``K**(3 - c_avg)``
     from the classes it hears; the force played is the sampled force times that factor
-    (clipped to 0..50 N). The control law is pure feedback's
-    (:data:`pipelines.methods.feedback.FEEDBACK_SETTINGS`: the factor within 1/1.5..1.5,
-    moving only while one side holds 85 % of the class probabilities). Unbounded, as
-    before, it undid much of the playable-space transform: on the rules' tuning set
-    (K. 421, Haydn op. 76/2 and op. 74/1, m. 1-8, four parts, seed 0) Helmholtz share
-    0.815 and class 3 0.598 against 0.842 and 0.666 with this law.
+    (clipped to 0..50 N), by pure feedback's law (``FEEDBACK_SETTINGS``: within 1/1.5..1.5,
+    moving only at 85 % sure). Unbounded, on the rules' tuning set it gave Helmholtz share
+    0.815 and class 3 0.598 (this law: 0.842, 0.666; README "Gesture sampling").
 
     Parameters
     ----------
