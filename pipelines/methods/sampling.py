@@ -387,7 +387,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     from the classes it hears; the force played is the sampled force times that factor
     (clipped to 0..50 N), by pure feedback's law (``FEEDBACK_SETTINGS``: within 1/1.5..1.5,
     moving only at 85 % sure). Unbounded, on the rules' tuning set it gave Helmholtz share
-    0.815 and class 3 0.598 (this law: 0.842, 0.666; README "Gesture sampling").
+    0.815 and class 3 0.598 (this law: 0.842, 0.666; README "Gesture database").
 
     Parameters
     ----------
