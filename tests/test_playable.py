@@ -13,6 +13,7 @@ from data_schemas.sampling import SAMPLE_CHOICES
 from pipelines.methods.playable import (
     BLEND,
     into_playable,
+    loop_range,
     note_force_factors,
     to_playable,
     window_middle,
@@ -150,3 +151,17 @@ def test_factors_are_recorded_in_the_choices():
     kept, off = to_playable(actions, targets, choices, "violin", {"render": {"playable_band": 0}})
     assert kept is actions and (off["force_factor"] == 1.0).all()
     assert "force_factor" in SAMPLE_CHOICES.column_names
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(0.01, 30.0), st.floats(0.02, 1.0), st.floats(0.03, 0.25), st.floats(1.0, 3.0))
+def test_loop_range_holds_the_sample_and_the_band(planned, v, beta, band):
+    """The range always contains the sampled force and the whole band around the middle."""
+    lo, hi = loop_range(np.array([[planned]]), np.array([[v]]), np.array([[beta]]),
+                        np.array([1.5]), band)
+    middle = float(window_middle(1.5, v, beta))
+    assert lo[0, 0] <= planned <= hi[0, 0]
+    assert lo[0, 0] <= middle / band * (1 + 1e-12) and hi[0, 0] >= middle * band * (1 - 1e-12)
+    # nothing wider than needed: each edge is the sample's or the band's
+    assert np.isclose(lo[0, 0], min(planned, middle / band))
+    assert np.isclose(hi[0, 0], max(planned, middle * band))

@@ -221,3 +221,36 @@ def test_arco_compare_errors_are_one_line(tmp_path, capsys, args, message):
     assert main(["compare", score, *args, "-o", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and message in err and err.startswith("arco compare: error:")
+
+
+def test_the_loop_keeps_sampled_forces_in_the_playable_band(tiny_db, mf_models_dir, scale,
+                                                            monkeypatch):
+    """With a band, every hop's force stays within the loop range given to the controller,
+    and that range is pipelines.methods.playable.loop_range of the sampled force."""
+    import synth.listening.controller as controller
+    from pipelines.methods.playable import loop_range
+    from pipelines.methods.sampling import open_database, render_sampling
+    from pipelines.perform.rules import string_force_factors
+
+    seen = {}
+    real = controller.play_plan
+
+    def spy(plan, *args, **kwargs):
+        log = real(plan, *args, **kwargs)
+        seen.update(plan=plan, planned=kwargs["planned_force"], range=kwargs["force_range"],
+                    log=log)
+        return log
+
+    monkeypatch.setattr(controller, "play_plan", spy)
+    sdb = open_database(tiny_db / "db")
+    render_sampling(scale, db=sdb, models=mf_models_dir, feedback=True, progress=False)
+    lo, hi = seen["range"]
+    plan = seen["plan"]
+    want = loop_range(seen["planned"], plan.velocity, plan.beta,
+                      string_force_factors("violin"), 1.5)
+    np.testing.assert_allclose(lo, want[0])
+    np.testing.assert_allclose(hi, want[1])
+    force = seen["log"].force
+    bowed = force > 0
+    assert np.all(force[bowed] >= lo[bowed] * (1 - 1e-12))
+    assert np.all(force[bowed] <= hi[bowed] * (1 + 1e-12))

@@ -205,5 +205,42 @@ def to_playable(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.DataFr
     return actions, choices
 
 
-__all__ = ["BLEND", "MAX_FACTOR", "MOVING", "SUSTAIN_SHARE", "into_playable", "note_force_factors",
-           "to_playable", "window_middle"]
+def loop_range(planned: np.ndarray, bow_velocity: np.ndarray, beta: np.ndarray,
+               reference_forces: np.ndarray, band: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-hop force range of a listening loop that corrects sampled forces.
+
+    The loop may move a hop's force anywhere inside the playable band, but not further out
+    of it than the sample already is (at a bow change the window's middle falls to zero
+    with the bow speed, and the sampled force stays playable there).
+
+    Parameters
+    ----------
+    planned : np.ndarray [shape=(n, n_strings)], N
+        The sampled force per hop and string.
+    bow_velocity, beta : np.ndarray [shape=(n, n_strings)]
+        The hops' bowing (m/s; ratio).
+    reference_forces : np.ndarray [shape=(n_strings,)], N
+    band : float
+        As for :func:`note_force_factors` (>= 1).
+
+    Returns
+    -------
+    lowest, highest : np.ndarray [shape=(n, n_strings)], N
+        ``min(planned, F_mid / band)`` and ``max(planned, F_mid band)``.
+
+    Examples
+    --------
+    >>> lo, hi = loop_range(np.array([[1.5, 4.0]]), np.full((1, 2), 0.3), np.full((1, 2), 0.1),
+    ...                     np.array([1.5, 1.5]), 1.5)
+    >>> lo.tolist(), hi.tolist()
+    ([[1.0, 1.0]], [[2.25, 4.0]])
+    """
+    if not band >= 1.0:
+        raise ParameterError(f"playable band={band!r} must be a ratio >= 1")
+    middle = window_middle(np.asarray(reference_forces)[None, :], bow_velocity, beta)
+    planned = np.asarray(planned, np.float64)
+    return np.minimum(planned, middle / band), np.maximum(planned, middle * band)
+
+
+__all__ = ["BLEND", "MAX_FACTOR", "MOVING", "SUSTAIN_SHARE", "into_playable", "loop_range",
+           "note_force_factors", "to_playable", "window_middle"]

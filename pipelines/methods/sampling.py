@@ -318,7 +318,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
                                  transpose_octaves=transpose_octaves)
         if audio:
             _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,
-                  diagnostics=diagnostics, engine=engine)
+                  diagnostics=diagnostics, engine=engine, band=_band(database))
         result.parts.append(rendered)
     if audio:
         result.audio = mix([p.audio for p in result.parts])
@@ -347,7 +347,7 @@ def _sampled_part(part: pd.DataFrame, index: int, database: SamplingDatabase,
 
 
 def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: int, seed: int,
-          diagnostics: bool, engine: str = "modal") -> None:
+          diagnostics: bool, engine: str = "modal", band: float = 0.0) -> None:
     """Synthesize a sampled part in place: open loop, or with ``models`` correcting the force.
 
     Closed loop, the part's performance becomes what was played (the sampled actions are
@@ -356,7 +356,8 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
     perf = part.performance
     if models is not None:
         y, played, diag = correct_force(perf, models, instrument=part.instrument,
-                                        sample_rate=sample_rate, seed=seed, engine=engine)
+                                        sample_rate=sample_rate, seed=seed, engine=engine,
+                                        band=band)
         part.audio = y
         part.extras["sampled_actions"] = perf.actions
         part.performance = Performance(played, perf.events, perf.warnings)
@@ -375,9 +376,25 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
 # --------------------------------------------------------------------------- feedback
 
 
+def _band(database: SamplingDatabase) -> float:
+    """The search settings' playable band (``[render] playable_band``; 0: off)."""
+    return float(database.search_config.get("render", {}).get("playable_band", 0.0))
+
+
+def _loop_range(plan, sampled: np.ndarray, instrument: str,
+                band: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The loop's per-hop force range inside the playable band (None: band 0, off)."""
+    from pipelines.methods.playable import loop_range
+    from pipelines.perform.rules import string_force_factors
+
+    if band == 0.0:
+        return None
+    return loop_range(sampled, plan.velocity, plan.beta, string_force_factors(instrument), band)
+
+
 def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrument: str,
                   sample_rate: int = 44100, seed: int = 0, engine: str = "modal",
-                  ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame]:
+                  band: float = 0.0) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame]:
     """Play sampled actions with the listening controller correcting the force hop by hop.
 
     The single integration point with :mod:`synth.listening.controller`: the hop plan of the
@@ -401,6 +418,8 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
         Seed of the controller's jitter and the engine.
     engine : str
         Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
+    band : float
+        Playable band: no hop's force leaves it further than sampled (0: off; ``loop_range``).
 
     Returns
     -------
@@ -448,7 +467,7 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     inst = get_engine(engine, instrument, sample_rate=sample_rate, seed=seed)
     log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 2]),
                     settings=FEEDBACK_SETTINGS, record_diagnostics=True,
-                    planned_force=sampled)
+                    planned_force=sampled, force_range=_loop_range(plan, sampled, instrument, band))
     tail = inst.process(int(TAIL * sample_rate), {}).audio
     played = played_actions(perf, plan, span, log, sample_rate=sample_rate)
     y = np.concatenate([log.audio, tail]).astype(np.float32)

@@ -275,7 +275,8 @@ def play_plan(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrumen
               rng: np.random.Generator, settings: ControllerSettings | None = None,
               K: float | None = None, initial_force: float | None = None,
               record_diagnostics: bool = False,
-              planned_force: np.ndarray | None = None) -> PerformanceLog:
+              planned_force: np.ndarray | None = None,
+              force_range: tuple[np.ndarray, np.ndarray] | None = None) -> PerformanceLog:
     """Play a hop plan with feedback control of the bow force.
 
     Without ``planned_force`` the controller owns the force (feedback control). With it,
@@ -301,6 +302,9 @@ def play_plan(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrumen
         controller never sees them).
     planned_force : np.ndarray [shape=(n, n_strings)], N, optional
         Force to correct instead of choosing one.
+    force_range : (np.ndarray, np.ndarray), each [shape=(n, n_strings)], N, optional
+        With ``planned_force``: the lowest and highest force each hop may play (default
+        0 .. :data:`MAX_FORCE`).
 
     Returns
     -------
@@ -308,7 +312,7 @@ def play_plan(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrumen
     """
     loop = _HopLoop(plan, models, instrument.sample_rate, rng=rng, settings=settings, K=K,
                     initial_force=initial_force, record_diagnostics=record_diagnostics,
-                    planned_force=planned_force)
+                    planned_force=planned_force, force_range=force_range)
     for k in range(plan.n_hops):
         controls = loop.controls(k)
         plucks = plan.plucks[k] if plan.plucks else ()
@@ -329,7 +333,8 @@ class _HopLoop:
                  sample_rate: int, *, rng: np.random.Generator,
                  settings: ControllerSettings | None, K: float | None,
                  initial_force: float | None, record_diagnostics: bool,
-                 planned_force: np.ndarray | None) -> None:
+                 planned_force: np.ndarray | None,
+                 force_range: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         n, n_strings = plan.bowed.shape
         self.n_hops, self.n_strings, self.sample_rate = n, n_strings, sample_rate
         self.models, self.rng, self.settings, self.K = models, rng, settings, K
@@ -353,6 +358,9 @@ class _HopLoop:
          self.expected_f0, self.target_speed, self.dynamic, self.note_start,
          self.finger_change) = _flat_plan(plan)
         self.planned = planned_force.ravel().tolist() if planned_force is not None else None
+        self.lowest, self.highest = ((np.ravel(force_range[0]).tolist(),
+                                      np.ravel(force_range[1]).tolist())
+                                     if force_range is not None else (None, None))
         self.noise = _jitter_draws(plan, rng, self.jitter, self.corrects)
         self.draw = 0
 
@@ -408,6 +416,8 @@ class _HopLoop:
             ratio = float(finger_ratio(semitones[i]))
             force = ctl.force if planned is None else min(max(planned[i] * ctl.force, 0.0),
                                                           MAX_FORCE)
+            if planned is not None and self.lowest is not None:
+                force = min(max(force, self.lowest[i]), self.highest[i])
             controls[s] = BowControl(v, force, self.beta[i], min(ratio, 0.8))
             self.force_log[i] = force
             self.vel_log[i] = v
