@@ -70,6 +70,16 @@ def window_middle(reference_force: np.ndarray | float, bow_velocity: np.ndarray 
     return np.asarray(reference_force, np.float64) * (v / 0.3) * (0.1 / b) ** 1.5
 
 
+def _check_band(band: float) -> None:
+    if not band >= 1.0:
+        raise ParameterError(f"playable band={band!r} must be a ratio >= 1")
+
+
+def playable_band(search_config: dict) -> float:
+    """The search settings' ``[render] playable_band`` (0: the transform is off)."""
+    return float(search_config.get("render", {}).get("playable_band", 0.0))
+
+
 def _note_of_rows(actions: pd.DataFrame, targets: pd.DataFrame) -> np.ndarray:
     """Target index of each bowed row (-1: before the first target, a lift or a pluck)."""
     onset = targets["onset"].to_numpy(np.float64)
@@ -109,14 +119,19 @@ def note_force_factors(actions: pd.DataFrame, targets: pd.DataFrame,
     ParameterError
         ``band`` below 1 or not a number.
     """
-    if not band >= 1.0:
-        raise ParameterError(f"playable band={band!r} must be a ratio >= 1")
-    note = _note_of_rows(actions, targets)
+    _check_band(band)
+    return _factors(actions, _note_of_rows(actions, targets), len(targets), reference_forces,
+                    band)
+
+
+def _factors(actions: pd.DataFrame, note: np.ndarray, n_notes: int,
+             reference_forces: np.ndarray, band: float) -> np.ndarray:
+    """:func:`note_force_factors` from each row's note (``_note_of_rows``)."""
     v = np.abs(actions["bow_velocity"].to_numpy(np.float64))
     ratio = actions["bow_force"].to_numpy(np.float64) / window_middle(
         np.asarray(reference_forces)[actions["string"].to_numpy(int)], v,
         actions["beta"].to_numpy(np.float64))
-    factors = np.ones(len(targets))
+    factors = np.ones(n_notes)
     for m in np.unique(note[note >= 0]):
         rows = note == m
         if v[rows].max() < MOVING:
@@ -169,11 +184,12 @@ def into_playable(actions: pd.DataFrame, targets: pd.DataFrame, reference_forces
     >>> round(float(f[0]), 3), round(float(out["bow_force"].iloc[120]), 3)
     (0.5, 2.25)
     """
-    factors = note_force_factors(actions, targets, reference_forces, band)
+    _check_band(band)
+    note = _note_of_rows(actions, targets)
+    factors = _factors(actions, note, len(targets), reference_forces, band)
     out = actions.copy()
     if np.all(factors == 1.0):
         return out, factors
-    note = _note_of_rows(actions, targets)
     rows = note >= 0
     per_row = np.where(rows, factors[np.maximum(note, 0)], 1.0)
     times = actions["time"].to_numpy(np.float64)
@@ -195,7 +211,7 @@ def to_playable(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.DataFr
     """
     from pipelines.perform.rules import string_force_factors
 
-    band = float(search_config.get("render", {}).get("playable_band", 0.0))
+    band = playable_band(search_config)
     choices = choices.copy()
     if band == 0.0:
         choices["force_factor"] = 1.0
@@ -235,12 +251,11 @@ def loop_range(planned: np.ndarray, bow_velocity: np.ndarray, beta: np.ndarray,
     >>> lo.tolist(), hi.tolist()
     ([[1.0, 1.0]], [[2.25, 4.0]])
     """
-    if not band >= 1.0:
-        raise ParameterError(f"playable band={band!r} must be a ratio >= 1")
+    _check_band(band)
     middle = window_middle(np.asarray(reference_forces)[None, :], bow_velocity, beta)
     planned = np.asarray(planned, np.float64)
     return np.minimum(planned, middle / band), np.maximum(planned, middle * band)
 
 
 __all__ = ["BLEND", "MAX_FACTOR", "MOVING", "SUSTAIN_SHARE", "into_playable", "loop_range",
-           "note_force_factors", "to_playable", "window_middle"]
+           "note_force_factors", "playable_band", "to_playable", "window_middle"]

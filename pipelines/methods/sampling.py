@@ -31,6 +31,7 @@ from data_schemas.errors import ParameterError
 from data_schemas.instruments import finger_ratio, instrument_facts, limits
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
+from pipelines.methods.playable import loop_range, playable_band, to_playable
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.methods.sampling_db import SamplingDatabase, adapt_forces, open_database
 from pipelines.methods.sampling_left_hand import play_left_hand
@@ -213,7 +214,6 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     """
     from gesture_db.assemble import assemble_actions
     from gesture_db.search import search
-    from pipelines.methods.playable import to_playable
     from pipelines.perform.ear import correct_by_ear
     from pipelines.perform.phrasing import assign_phrasing, phrase_marks
     from pipelines.perform.rules import prepare_events
@@ -318,7 +318,7 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
                                  transpose_octaves=transpose_octaves)
         if audio:
             _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,
-                  diagnostics=diagnostics, engine=engine, band=_band(database))
+                  diagnostics=diagnostics, engine=engine, search=database.search_config)
         result.parts.append(rendered)
     if audio:
         result.audio = mix([p.audio for p in result.parts])
@@ -347,17 +347,18 @@ def _sampled_part(part: pd.DataFrame, index: int, database: SamplingDatabase,
 
 
 def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: int, seed: int,
-          diagnostics: bool, engine: str = "modal", band: float = 0.0) -> None:
+          diagnostics: bool, engine: str = "modal", search: dict | None = None) -> None:
     """Synthesize a sampled part in place: open loop, or with ``models`` correcting the force.
 
     Closed loop, the part's performance becomes what was played (the sampled actions are
-    kept in ``extras["sampled_actions"]``) and contact diagnostics are always recorded.
+    kept in ``extras["sampled_actions"]``) and contact diagnostics are always recorded; the
+    loop keeps to the playable band of the search settings ``search``.
     """
     perf = part.performance
     if models is not None:
         y, played, diag = correct_force(perf, models, instrument=part.instrument,
                                         sample_rate=sample_rate, seed=seed, engine=engine,
-                                        band=band)
+                                        band=playable_band(search or {}))
         part.audio = y
         part.extras["sampled_actions"] = perf.actions
         part.performance = Performance(played, perf.events, perf.warnings)
@@ -376,15 +377,9 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
 # --------------------------------------------------------------------------- feedback
 
 
-def _band(database: SamplingDatabase) -> float:
-    """The search settings' playable band (``[render] playable_band``; 0: off)."""
-    return float(database.search_config.get("render", {}).get("playable_band", 0.0))
-
-
 def _loop_range(plan, sampled: np.ndarray, instrument: str,
                 band: float) -> tuple[np.ndarray, np.ndarray] | None:
     """The loop's per-hop force range inside the playable band (None: band 0, off)."""
-    from pipelines.methods.playable import loop_range
     from pipelines.perform.rules import string_force_factors
 
     if band == 0.0:
