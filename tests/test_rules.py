@@ -120,7 +120,8 @@ def test_dynamics_set_beta_and_velocity(perf):
 
 def test_force_comes_from_the_dynamic_table(perf):
     mid = bowed(perf, 0.45, 0.55)
-    factor = string_force_factors("violin")[mid["string"].to_numpy(int)]
+    factor = (string_force_factors("violin")[mid["string"].to_numpy(int)]
+              * CFG["instruments"]["violin"]["force_scale"])
     assert mid["bow_force"].to_numpy() == pytest.approx(
         float(dynamic_table(CFG, "force", [5.0])[0]) * factor)
 
@@ -363,8 +364,8 @@ def test_instrument_override_changes_force(notes, perf):
     ratio = force_at(viola, 0.5) / force_at(perf, 0.5)
     string_violin = int(bowed(perf, 0.5, 0.51)["string"].iloc[0])
     string_viola = int(bowed(viola, 0.5, 0.51)["string"].iloc[0])
-    expected = (CFG["instruments"]["viola"]["force_scale"]
-                * string_force_factors("viola")[string_viola]
-                / string_force_factors("violin")[string_violin])
+    scale = {name: CFG["instruments"][name]["force_scale"] for name in ("violin", "viola")}
+    expected = (scale["viola"] * string_force_factors("viola")[string_viola]
+                / (scale["violin"] * string_force_factors("violin")[string_violin]))
     assert ratio == pytest.approx(expected)
     assert ratio != pytest.approx(1.0)

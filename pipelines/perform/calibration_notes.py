@@ -3,8 +3,9 @@
 The loudness calibration (``bench/calibrate_loudness.py``) and the pitch calibration
 (``bench/calibrate_pitch.py``) both have the instrument model play one steady note per row
 of a grid of (string, semitone, level), each bowed for :data:`NOTE` s at the lane's beta,
-velocity and force (force in multiples of the string's reference force, as the rules play)
-with :data:`GAP` s of silence between notes, bow direction alternating.
+velocity and force (force in multiples of the string's reference force times the
+instrument's ``[instruments.<name>] force_scale``, as the rules play) with :data:`GAP` s
+of silence between notes, bow direction alternating.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ def steady_actions(instrument: str, notes: pd.DataFrame, config: dict[str, Any],
     notes : pandas.DataFrame
         Columns ``string``, ``semitone`` and ``level`` (lane level 0..9).
     config : dict
-        Rules configuration (its lanes and ``[vibrato]``).
+        Rules configuration (its lanes, the instrument's ``force_scale`` and ``[vibrato]``).
     vibrato : bool
         Stopped notes with the rules' mf vibrato (a sine of ``[vibrato] extent`` cents at
         ``rate``: a resonance narrower than the vibrato is heard as the vibrato sweeps it);
@@ -61,7 +62,7 @@ def steady_actions(instrument: str, notes: pd.DataFrame, config: dict[str, Any],
     from pipelines.perform.config import dynamic_table
     from pipelines.perform.rules import string_force_factors
 
-    ref = string_force_factors(instrument)
+    ref = string_force_factors(instrument) * config["instruments"][instrument]["force_scale"]
     vib = config["vibrato"]
     frames = []
     for k, (t0, n) in enumerate(zip(note_starts(len(notes)), notes.itertuples(), strict=True)):

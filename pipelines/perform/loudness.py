@@ -47,6 +47,9 @@ _SOURCES = (Path(__file__).resolve().parents[2] / "synth" / "config" / "strings.
 def calibration_key(config: dict[str, Any]) -> str:
     """Hash of what the calibration depends on: string physics, instrument facts, lanes.
 
+    The lanes are the dynamic table's beta, velocity and force and each instrument's
+    ``force_scale`` (the calibration plays the forces the rules play).
+
     Examples
     --------
     >>> from pipelines.perform.config import load_config
@@ -58,6 +61,8 @@ def calibration_key(config: dict[str, Any]) -> str:
         h.update(path.read_bytes())
     for key in ("beta", "velocity", "force"):
         h.update(np.asarray(config["dynamics"][key], dtype=np.float64).tobytes())
+    for name in sorted(config["instruments"]):
+        h.update(f"{name}={float(config['instruments'][name]['force_scale'])!r}".encode())
     return h.hexdigest()[:16]
 
 
