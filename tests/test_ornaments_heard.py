@@ -155,10 +155,6 @@ def test_second_movement_trill_is_heard_at_its_own_tempo(heard):
     assert _trill_rate(second, 0.05, 1.7, 78, 79) == pytest.approx(8.0, rel=0.1)
 
 
-@pytest.mark.xfail(strict=True, reason="known defect (attacks, issues #12/#14): the mordent "
-                   "falls on a bow change at 1.6 N (the phrase's high point; mf bows 0.6 N), "
-                   "and the attack crushes its first 60 ms figure note: pYIN hears a flat "
-                   "Bb4 for 30 ms, then B4, C5")
 def test_mordent_first_figure_note_is_heard(heard):
     assert [p for p, _ in _runs(heard[0], 1.52, 2.2)][0] == 72
 
@@ -166,7 +162,7 @@ def test_mordent_first_figure_note_is_heard(heard):
 def test_mordents_and_turn_are_heard_in_order(heard):
     first = heard[0]
     mordent = _runs(first, 1.52, 2.2)
-    assert [p for p, _ in mordent][-2:] == [71, 72]  # the first: the xfail above
+    assert [p for p, _ in mordent][-2:] == [71, 72]  # the first: the test above
     assert mordent[-2][1] == pytest.approx(1.5 + 0.06, abs=0.04)  # a 0.06 s figure note
     assert [p for p, _ in _runs(first, 2.27, 2.95)] == [76, 77, 76]
     turn = _runs(first, 3.02, 3.7)
