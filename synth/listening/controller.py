@@ -303,8 +303,7 @@ def play_plan(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrumen
     planned_force : np.ndarray [shape=(n, n_strings)], N, optional
         Force to correct instead of choosing one.
     force_range : (np.ndarray, np.ndarray), each [shape=(n, n_strings)], N, optional
-        With ``planned_force``: the lowest and highest force each hop may play (default
-        0 .. :data:`MAX_FORCE`).
+        With ``planned_force``: each hop's lowest and highest force (default 0..MAX_FORCE).
 
     Returns
     -------
@@ -333,8 +332,7 @@ class _HopLoop:
                  sample_rate: int, *, rng: np.random.Generator,
                  settings: ControllerSettings | None, K: float | None,
                  initial_force: float | None, record_diagnostics: bool,
-                 planned_force: np.ndarray | None,
-                 force_range: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+                 planned_force: np.ndarray | None, force_range: tuple | None) -> None:
         n, n_strings = plan.bowed.shape
         self.n_hops, self.n_strings, self.sample_rate = n, n_strings, sample_rate
         self.models, self.rng, self.settings, self.K = models, rng, settings, K
@@ -358,9 +356,7 @@ class _HopLoop:
          self.expected_f0, self.target_speed, self.dynamic, self.note_start,
          self.finger_change) = _flat_plan(plan)
         self.planned = planned_force.ravel().tolist() if planned_force is not None else None
-        self.lowest, self.highest = ((np.ravel(force_range[0]).tolist(),
-                                      np.ravel(force_range[1]).tolist())
-                                     if force_range is not None else (None, None))
+        self.lowest, self.highest = _force_bounds(force_range, n * n_strings)
         self.noise = _jitter_draws(plan, rng, self.jitter, self.corrects)
         self.draw = 0
 
@@ -414,10 +410,8 @@ class _HopLoop:
                 self.draw += 1
             v = min(max(v, -5.0), 5.0)
             ratio = float(finger_ratio(semitones[i]))
-            force = ctl.force if planned is None else min(max(planned[i] * ctl.force, 0.0),
-                                                          MAX_FORCE)
-            if planned is not None and self.lowest is not None:
-                force = min(max(force, self.lowest[i]), self.highest[i])
+            force = ctl.force if planned is None else min(max(planned[i] * ctl.force,
+                                                              self.lowest[i]), self.highest[i])
             controls[s] = BowControl(v, force, self.beta[i], min(ratio, 0.8))
             self.force_log[i] = force
             self.vel_log[i] = v
@@ -449,6 +443,13 @@ class _HopLoop:
         return PerformanceLog(self.audio, np.array(self.force_log, np.float64).reshape(shape),
                               np.array(self.vel_log, np.float64).reshape(shape),
                               np.array(self.classes, np.int64).reshape(shape), self.diag)
+
+
+def _force_bounds(force_range: tuple | None, size: int) -> tuple[list, list]:
+    """Flat per-hop lowest and highest force of a corrected plan, within 0..MAX_FORCE."""
+    if force_range is None:
+        return [0.0] * size, [MAX_FORCE] * size
+    return tuple(np.clip(np.ravel(r), 0.0, MAX_FORCE).tolist() for r in force_range)
 
 
 def _flat_plan(plan: HopPlan) -> tuple[list, ...]:
