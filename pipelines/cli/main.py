@@ -30,6 +30,7 @@ COMMAND_MODULES = (
     "pipelines.cli.commands.build_db",
     "pipelines.cli.commands.db",
     "pipelines.cli.commands.train",
+    "pipelines.cli.commands.practice",
     "pipelines.cli.commands.evaluate",
     "pipelines.cli.commands.compare",
 )

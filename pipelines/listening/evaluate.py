@@ -140,6 +140,20 @@ def evaluate(audio: np.ndarray, actions: pd.DataFrame | None = None, *,
         Unplayable audio, neither actions nor timed notes, or audio whose length does not
         fit the notes (:func:`check_length`).
     """
+    audio, spans, context = _prepared(audio, actions, sample_rate=sample_rate,
+                                      diagnostics=diagnostics, instrument=instrument,
+                                      lanes=_lanes(score, config), timed_notes=timed_notes)
+    results = [_note_figures(span, context, spans[i - 1] if i else None, i)
+               for i, span in enumerate(spans)]
+    return {"measured_from": "instrument diagnostics" if context.slips is not None
+            else "audio-only estimates",
+            "piece": piece_figures(results), "notes": results}
+
+
+def _prepared(audio: np.ndarray, actions: pd.DataFrame | None, *, sample_rate: int,
+              diagnostics: pd.DataFrame | None, instrument: str, lanes,
+              timed_notes: pd.DataFrame | None) -> tuple[np.ndarray, list[NoteSpan], _Context]:
+    """Checked, hop-padded audio, the notes and the context their figures read."""
     from synth.listening.clips import reference_rms
     from synth.strings import load_instrument
 
@@ -167,13 +181,10 @@ def evaluate(audio: np.ndarray, actions: pd.DataFrame | None = None, *,
                        reference_rms(instrument, sample_rate)
                        if sample_rate in (44100, 48000) else 0.02,
                        [s.reference_force for s in consts.strings],
-                       _lanes(score, config), margin)
+                       lanes, margin)
     context.spans = spans if actions is None else None
     context.all_spans = spans
-    results = [_note_figures(span, context, spans[i - 1] if i else None, i)
-               for i, span in enumerate(spans)]
-    return {"measured_from": "instrument diagnostics" if slips else "audio-only estimates",
-            "piece": piece_figures(results), "notes": results}
+    return audio, spans, context
 
 
 class _Context:
@@ -248,19 +259,7 @@ def _note_figures(span: NoteSpan, ctx: _Context, previous: NoteSpan | None,
         ringing = nm.ringing_periods(span, ctx.all_spans[:index], sr)
         helm, attack, _ = nm.from_waveform(span, ctx.pre, hops, sr, start, ringing)
     blocked = nm.attack_blocked(span, ctx.actions, ctx.spans)
-    stats = _teacher_stats(span, hops, ctx)
-    t = (hops + 0.5) * HOP / sr
-    bowing = _bowing(span, t, ctx.actions)
-    if bowing is not None:
-        v, force, beta = np.abs(bowing[0]), bowing[1], bowing[2]
-        ratio = [force[i] / reference_force(ctx.string_refs[span.string], max(v[i], 1e-3),
-                                            beta[i]) for i in range(hops.size)]
-        lane_ratio = float(np.median(v[sustained] / beta[sustained])) if sustained.any() \
-            else MF_RATIO
-    else:
-        ratio, lane_ratio = [1.0] * hops.size, MF_RATIO
-    classes = np.array([judge(st, force_ratio=r) for st, r in zip(stats, ratio, strict=True)],
-                       np.int64).reshape(-1)
+    stats, classes, lane_ratio = _judged(span, hops, sustained, ctx)
     if ctx.lanes is not None:
         onsets, dynamics, ratio_of = ctx.lanes
         level_of_note = dynamics[int(np.argmin(np.abs(onsets - span.t0)))]
@@ -287,6 +286,62 @@ def _note_figures(span: NoteSpan, ctx: _Context, previous: NoteSpan | None,
         "sustained_class_histogram": _histogram(classes[sustained] if classes.size
                                                 else classes),
     }
+
+
+def _judged(span: NoteSpan, hops: np.ndarray, sustained: np.ndarray,
+            ctx: _Context) -> tuple[list[RegimeStatistics], np.ndarray, float]:
+    """The teacher's statistics and class of each of the note's hops, and its v / beta."""
+    stats = _teacher_stats(span, hops, ctx)
+    t = (hops + 0.5) * HOP / ctx.sample_rate
+    bowing = _bowing(span, t, ctx.actions)
+    if bowing is not None:
+        v, force, beta = np.abs(bowing[0]), bowing[1], bowing[2]
+        ratio = [force[i] / reference_force(ctx.string_refs[span.string], max(v[i], 1e-3),
+                                            beta[i]) for i in range(hops.size)]
+        lane_ratio = float(np.median(v[sustained] / beta[sustained])) if sustained.any() \
+            else MF_RATIO
+    else:
+        ratio, lane_ratio = [1.0] * hops.size, MF_RATIO
+    classes = np.array([judge(st, force_ratio=r) for st, r in zip(stats, ratio, strict=True)],
+                       np.int64).reshape(-1)
+    return stats, classes, lane_ratio
+
+
+def judged_hops(audio: np.ndarray, actions: pd.DataFrame, *, diagnostics: pd.DataFrame,
+                instrument: str = "violin", sample_rate: int = 44100) -> pd.DataFrame:
+    """The teacher's class of every hop of every note of a render (for practice).
+
+    Parameters
+    ----------
+    audio : np.ndarray [shape=(n,)]
+        Mono audio of the render.
+    actions : pandas.DataFrame
+        The actions table that was played.
+    diagnostics : pandas.DataFrame
+        The render's contact diagnostics (the slip record the teacher reads).
+    instrument : str
+    sample_rate : int, Hz
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per hop of a note: ``hop`` (index of ``HOP`` samples from 0), ``string``,
+        ``label`` (class 1..5) and ``sustained`` (bool, a hop the evaluation judges).
+    """
+    _, spans, ctx = _prepared(audio, actions, sample_rate=sample_rate, diagnostics=diagnostics,
+                              instrument=instrument, lanes=None, timed_notes=None)
+    frames = []
+    for span in spans:
+        hops = nm.note_hops(span, sample_rate)
+        if span.string < 0 or not hops.size:
+            continue
+        sustained = nm.sustained_hops(span, hops, sample_rate, actions, 0.0, None)
+        _, classes, _ = _judged(span, hops, sustained, ctx)
+        frames.append(pd.DataFrame({"hop": hops, "string": span.string, "label": classes,
+                                    "sustained": sustained}))
+    if not frames:
+        return pd.DataFrame({"hop": [], "string": [], "label": [], "sustained": []})
+    return pd.concat(frames, ignore_index=True)
 
 
 def _histogram(classes: np.ndarray) -> dict[str, int]:

@@ -364,7 +364,7 @@ class _HopLoop:
         """The string's controller, switched to the pair of dynamic ``dyn``."""
         model = self.model_of.get((s, dyn))
         if model is None:
-            model = self.model_of[(s, dyn)] = _model_for(self.models, s, dyn)
+            model = self.model_of[(s, dyn)] = model_for(self.models, s, dyn)
         ctl = self.controllers.get(s)
         if ctl is None:
             ctl = self.controllers[s] = ForceController(model, self.rng, self.settings,
@@ -486,15 +486,14 @@ def _jitter_draws(plan: HopPlan, rng: np.random.Generator, jitter: float,
     return rng.standard_normal(n_draws).tolist() if n_draws else []
 
 
-def _model_for(models: dict[tuple[int, str], PairModel], string: int, dynamic: str) -> PairModel:
-    from synth.listening.classifier import DYNAMICS
+def model_for(models: dict[tuple[int, str], PairModel], string: int, dynamic: str) -> PairModel:
+    """The pair that plays ``string`` at ``dynamic``: its own, else the nearest dynamic's."""
+    from synth.listening.classifier import DYNAMICS, ModelError
 
     if (string, dynamic) in models:
         return models[(string, dynamic)]
     order = DYNAMICS.index(dynamic) if dynamic in DYNAMICS else 2
     candidates = [(abs(DYNAMICS.index(d) - order), d) for (s, d) in models if s == string]
     if not candidates:
-        from synth.listening.classifier import ModelError
-
         raise ModelError(f"no trained model for string {string} (any dynamic)")
     return models[(string, min(candidates)[1])]

@@ -1,0 +1,80 @@
+"""``arco practice --instrument violin --models models/ -o practised/``: practise on music.
+
+Vivi 2011, section 5.3: the instrument's parts of real music are played open loop at
+per-stroke force factors, the teacher judges every sustained hop, and each string x dynamic
+classifier is refitted on its support vectors plus those hops
+(:mod:`pipelines.listening.practice`).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from data_schemas.errors import ParameterError
+from pipelines.cli.outputs import output_dir
+from pipelines.cli.types import positive_int, seeds
+from synth.strings import INSTRUMENT_NAMES
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``practice`` sub-command."""
+    p = subparsers.add_parser(
+        "practice", help="retrain the listening classifiers on judged hops of real music",
+        description="Play the instrument's parts of the scores open loop, the force of each "
+                    "stroke off by a seeded factor; the teacher judges every sustained hop; "
+                    "each string x dynamic classifier is refitted on its support vectors "
+                    "plus those hops (K and initial forces kept). Writes a new model "
+                    "directory usable as --models.")
+    p.add_argument("--instrument", default="violin", choices=INSTRUMENT_NAMES,
+                   help="instrument whose pairs practise (its parts of the scores are played)")
+    p.add_argument("--models", required=True, metavar="DIR",
+                   help="trained models to start from (arco train); never overwritten")
+    p.add_argument("-o", "--output", required=True, metavar="DIR",
+                   help="directory of the practised models (other files of --models are "
+                        "copied there when missing)")
+    p.add_argument("--score", action="append", metavar="FILE",
+                   help="score to practise on (repeatable; default: the bundled K. 421)")
+    p.add_argument("--measures", default="1-8", metavar="A-B",
+                   help="measures of each score's first movement, inclusive (default 1-8)")
+    p.add_argument("--seeds", type=seeds, default=2, metavar="N|S1,S2",
+                   help="practice renders of every part: N seeds 0..N-1 or a list (default 2)")
+    p.add_argument("--spread", type=float, default=2.0,
+                   help="largest per-stroke force factor and 1/smallest (default 2)")
+    p.add_argument("--config", metavar="RULES.toml", help="rules settings")
+    p.add_argument("--workers", type=positive_int, default=1, help="local worker processes")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def _measures(text: str) -> tuple[int, int]:
+    a, _, b = text.partition("-")
+    if not (a.strip().isdigit() and b.strip().isdigit()) or not 1 <= int(a) <= int(b):
+        raise ParameterError(f"--measures {text!r}: write A-B with 1 <= A <= B, e.g. 1-8")
+    return int(a), int(b)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Practise and print one line per pair."""
+    from pipelines.listening.practice import Excerpt, practise
+    from pipelines.perform.config import load_config
+    from pipelines.score.bundled import bundled_score
+
+    if not args.spread > 1.0:
+        raise ParameterError(f"--spread {args.spread} must be > 1")
+    output_dir(args.output)
+    start, end = _measures(args.measures)
+    excerpts = [Excerpt(str(path), start, end) for path in (args.score or [bundled_score()])]
+    chosen = list(range(args.seeds)) if isinstance(args.seeds, int) else args.seeds
+    summary = practise(args.instrument, args.models, args.output, excerpts,
+                       config=load_config(args.config), seeds=chosen, spread=args.spread,
+                       workers=args.workers, progress=not args.quiet)
+    for r in summary:
+        if r["hops_added"]:
+            unheard = r["agreement_unheard"]
+            held = "" if unheard != unheard else f", on unheard seeds {100 * unheard:.1f} %"
+            print(f"{r['key']}: {r['hops_added']} hops {r['class_counts']}, agreement with "
+                  f"the teacher {100 * r['agreement_before']:.1f} % -> "
+                  f"{100 * r['agreement_after']:.1f} %{held}")
+        else:
+            print(f"{r['key']}: no practice hops (copied unchanged)")
+    return 0

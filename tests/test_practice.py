@@ -1,0 +1,168 @@
+"""Practice on music: the support-vector refit, stroke factors, the replayed listener, the CLI."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import pipelines.cli.main as cli
+from data_schemas.errors import ParameterError
+from pipelines.listening.practice import AS_PLANNED, heard_features, stroke_factors
+from synth.listening.classifier import fit_pair
+from synth.listening.controller import HopPlan
+from synth.listening.features import (
+    FEATURE_NAMES,
+    HOP,
+    WINDOW,
+    StreamingFeatures,
+    yin_window_for,
+)
+from synth.listening.refit import refit_pair, support_set
+
+N_FEATURES = len(FEATURE_NAMES)
+
+
+def _toy_model(seed: int = 0):
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(240, N_FEATURES))
+    y = np.where(X[:, 0] + 0.3 * X[:, 1] > 0.4, 4, np.where(X[:, 0] < -0.4, 2, 3))
+    return fit_pair(X, y, instrument="violin", string=1, dynamic="mf", folds=2), X, y
+
+
+def test_support_vectors_come_back_in_feature_units():
+    model, X, y = _toy_model()
+    sv, labels = support_set(model)
+    # Every support vector is one of the training hops, with that hop's class.
+    for row, label in zip(sv, labels, strict=True):
+        i = int(np.argmin(np.abs(X - row).sum(axis=1)))
+        assert np.allclose(X[i], row, atol=1e-9) and y[i] == label
+
+
+def test_refit_on_its_own_support_vectors_keeps_the_decisions():
+    model, _, _ = _toy_model()
+    refit = refit_pair(model, np.zeros((0, N_FEATURES)), [])
+    probe = np.random.default_rng(1).normal(size=(2000, N_FEATURES)) * 1.5
+    # The SVM optimum depends only on the support vectors (the solver's tolerance aside).
+    assert np.mean(model.predict(probe) == refit.predict(probe)) >= 0.995
+
+
+def test_refit_learns_what_practice_heard():
+    model, _, _ = _toy_model()
+    rng = np.random.default_rng(2)
+    heard = rng.normal(size=(300, N_FEATURES)) * 0.3
+    heard[:, 0] += 2.5  # the basic training calls this region class 4
+    assert np.mean(model.predict(heard) == 4) > 0.9
+    model.metadata.update(K=1.02, initial_forces=[0.5, 0.6, 0.7])
+    refit = refit_pair(model, heard, np.full(300, 3))
+    probe = rng.normal(size=(200, N_FEATURES)) * 0.3
+    probe[:, 0] += 2.5
+    assert np.mean(refit.predict(probe) == 3) > 0.9
+    far = rng.normal(size=(200, N_FEATURES)) * 0.3
+    far[:, 0] -= 2.0  # class 2, far from the practice hops: unchanged
+    assert np.mean(refit.predict(far) == model.predict(far)) > 0.95
+    assert refit.metadata["refit"]["hops_added"] == 300
+    assert refit.metadata["K"] == 1.02 and refit.metadata["initial_forces"] == [0.5, 0.6, 0.7]
+
+
+@pytest.mark.parametrize(("features", "labels", "weight", "match"), [
+    (np.zeros((3, N_FEATURES - 1)), [3, 3, 3], 1.0, "hops x"),
+    (np.zeros((3, N_FEATURES)), [3, 3], 1.0, "3 feature rows but 2 labels"),
+    (np.zeros((2, N_FEATURES)), [0, 3], 1.0, "classes 1..5"),
+    (np.full((1, N_FEATURES), np.nan), [3], 1.0, "finite"),
+    (np.zeros((1, N_FEATURES)), [3], 0.0, "weight"),
+])
+def test_refit_rejects_bad_hops(features, labels, weight, match):
+    model, _, _ = _toy_model()
+    with pytest.raises(ParameterError, match=match):
+        refit_pair(model, features, labels, weight=weight)
+
+
+def _plan(n: int, starts: list[int], bowed_to: int | None = None, f0: float = 293.66):
+    shape = (n, 4)
+    plan = HopPlan(np.zeros(shape, bool), np.zeros(shape), np.full(shape, 0.1),
+                   np.zeros(shape), np.full(shape, f0), np.full(shape, 0.3),
+                   np.full(shape, "mf", object), np.zeros(shape, bool),
+                   np.zeros(shape, bool))
+    plan.bowed[:bowed_to or n, 1] = True
+    plan.note_start[starts, 1] = True
+    return plan
+
+
+@settings(max_examples=40, deadline=None)
+@given(starts=st.lists(st.integers(0, 199), min_size=1, max_size=30, unique=True),
+       spread=st.floats(1.05, 4.0), seed=st.integers(0, 2**16))
+def test_stroke_factors_hold_over_each_stroke(starts, spread, seed):
+    plan = _plan(200, sorted(starts))
+    f = stroke_factors(plan, np.random.default_rng(seed), spread)
+    again = stroke_factors(plan, np.random.default_rng(seed), spread)
+    assert np.array_equal(f, again)
+    assert np.all(f[:, [0, 2, 3]] == 1.0)
+    assert np.all((f >= 1.0 / spread - 1e-12) & (f <= spread + 1e-12))
+    bounds = sorted(starts) + [200]
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        assert np.all(f[a:b, 1] == f[a, 1])
+
+
+def test_about_a_third_of_strokes_as_planned():
+    plan = _plan(3000, list(range(0, 3000, 3)))
+    f = stroke_factors(plan, np.random.default_rng(0), 2.0)[::3, 1]
+    assert abs(np.mean(f == 1.0) - AS_PLANNED) < 0.05
+    with pytest.raises(ParameterError, match="spread"):
+        stroke_factors(plan, np.random.default_rng(0), 1.0)
+
+
+def test_heard_features_forget_before_each_stroke():
+    sr, n = 44100, 80
+    t = np.arange(n * HOP) / sr
+    tone = (0.1 * np.sin(2 * np.pi * 293.66 * t)).astype(np.float32)
+    noisy = tone.copy()
+    noisy[:40 * HOP] = np.random.default_rng(0).normal(0, 0.1, 40 * HOP)
+    plan = _plan(n, [0, 40], bowed_to=70)
+    a, b = heard_features(plan, tone, sr), heard_features(plan, noisy, sr)
+    full = WINDOW // HOP  # hops until the listener has heard a whole window
+    assert np.all(np.isnan(a[:, [0, 2, 3]])) and np.all(np.isnan(a[70:, 1]))
+    assert np.all(np.isnan(a[40:40 + full - 1, 1]))  # just reset: not a window yet
+    assert np.array_equal(a[40 + full:70, 1], b[40 + full:70, 1])
+    # The same as a listener that heard only the second stroke.
+    lis = StreamingFeatures(sr, yin_window=yin_window_for(293.66, sr))
+    for k in range(40, 70):
+        x = lis.push(tone[k * HOP:(k + 1) * HOP], 293.66)
+        if lis.ready:
+            assert np.array_equal(x, a[k, 1])
+
+
+def _d_string_score(path):
+    from music21 import dynamics, note, stream, tempo
+
+    part = stream.Part()
+    part.partName = "Violin"
+    part.append(tempo.MetronomeMark(number=90))
+    part.append(dynamics.Dynamic("mf"))
+    for p in ("D4", "E4", "F#4", "G4"):
+        part.append(note.Note(p, quarterLength=1))
+    score = stream.Score()
+    score.insert(0, part)
+    score.write("musicxml", fp=str(path))
+    return path
+
+
+def test_practice_cli_writes_practised_pairs(models_dir, tmp_path, capsys):
+    score = _d_string_score(tmp_path / "d.musicxml")
+    out = tmp_path / "practised"
+    code = cli.main(["practice", "--models", str(models_dir), "-o", str(out), "--score",
+                     str(score), "--measures", "1-1", "--seeds", "2", "--quiet"])
+    text, err = capsys.readouterr()
+    assert code == 0, err
+    assert "violin-1-mf:" in text and "on unheard seeds" in text
+    meta = json.loads((out / "violin-1-mf.json").read_text())
+    practice = meta["practice"]
+    assert practice["hops_added"] > 50 and practice["seeds"] == [0, 1]
+    assert set(practice["class_counts"]) <= {"1", "2", "3", "4", "5"}
+    assert meta["complete"] and meta["refit"]["hops_added"] == practice["hops_added"]
+    code = cli.main(["practice", "--models", str(models_dir), "-o", str(models_dir),
+                     "--score", str(score), "--quiet"])
+    assert code != 0 and "must differ" in capsys.readouterr().err
