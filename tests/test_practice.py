@@ -5,13 +5,20 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import pipelines.cli.main as cli
 from data_schemas.errors import ParameterError
-from pipelines.listening.practice import AS_PLANNED, heard_features, stroke_factors
+from pipelines.listening.practice import (
+    AS_PLANNED,
+    direction_labels,
+    heard_features,
+    stroke_factors,
+)
+from pipelines.listening.practice_refit import MIN_STROKES, practised_factor
 from synth.listening.classifier import fit_pair
 from synth.listening.controller import HopPlan
 from synth.listening.features import (
@@ -135,6 +142,45 @@ def test_heard_features_forget_before_each_stroke():
             assert np.array_equal(x, a[k, 1])
 
 
+def _variants(shares: dict[float, list[int]], strokes: int = 1) -> pd.DataFrame:
+    """Hops of ``strokes`` strokes played at each factor with the given teacher labels."""
+    rows = []
+    for v, (factor, labels) in enumerate(shares.items()):
+        for stroke in range(strokes):
+            rows += [{"part": "p", "seed": 0, "string": 2, "stroke": stroke, "variant": v,
+                      "factor": factor, "teacher_label": c} for c in labels]
+    return pd.DataFrame(rows)
+
+
+def test_direction_points_to_the_stroke_best_variant():
+    hops = _variants({1.0: [2, 2, 3, 3], 0.6: [3, 3, 3, 4], 1.7: [4, 4, 4, 3]})
+    labels = direction_labels(hops)
+    teacher = hops["teacher_label"].to_numpy()
+    assert np.all(labels[teacher == 3] == 3)  # heard as good: hold
+    factor = hops["factor"].to_numpy()
+    assert np.all(labels[(teacher != 3) & (factor == 1.0)] == 4)  # the best is lighter
+    assert np.all(labels[(teacher != 3) & (factor == 1.7)] == 4)
+    assert np.all(labels[(teacher != 3) & (factor == 0.6)] == 3)  # the best: force no cure
+
+
+def test_direction_ties_go_to_the_planned_force():
+    hops = _variants({1.0: [3, 2], 1.5: [2, 3], 0.7: [4, 3]})
+    labels = direction_labels(hops)
+    faults = hops["teacher_label"].to_numpy() != 3
+    assert labels[faults & (hops["factor"] == 1.5).to_numpy()].tolist() == [4]
+    assert labels[faults & (hops["factor"] == 0.7).to_numpy()].tolist() == [2]
+    assert labels[faults & (hops["factor"] == 1.0).to_numpy()].tolist() == [3]
+
+
+def test_practised_factor_finds_the_better_force_and_needs_evidence():
+    better = {1.0: [2, 2, 3, 3], 1.4: [3, 3, 3, 3], 0.7: [2, 2, 2, 3]}
+    factor, gain = practised_factor(_variants(better, strokes=MIN_STROKES))
+    assert factor == pytest.approx(1.4) and gain > 0.1
+    assert practised_factor(_variants(better, strokes=MIN_STROKES - 1)) == (1.0, 0.0)
+    same = {1.0: [3, 3, 2], 1.4: [3, 3, 2], 0.7: [3, 3, 2]}
+    assert practised_factor(_variants(same, strokes=MIN_STROKES))[0] == 1.0
+
+
 def _d_string_score(path):
     from music21 import dynamics, note, stream, tempo
 
@@ -157,12 +203,29 @@ def test_practice_cli_writes_practised_pairs(models_dir, tmp_path, capsys):
                      str(score), "--measures", "1-1", "--seeds", "2", "--quiet"])
     text, err = capsys.readouterr()
     assert code == 0, err
-    assert "violin-1-mf:" in text and "on unheard seeds" in text
+    assert "violin-1-mf:" in text and "on unheard seeds" in text and "best factor" in text
     meta = json.loads((out / "violin-1-mf.json").read_text())
     practice = meta["practice"]
     assert practice["hops_added"] > 50 and practice["seeds"] == [0, 1]
     assert set(practice["class_counts"]) <= {"1", "2", "3", "4", "5"}
     assert meta["complete"] and meta["refit"]["hops_added"] == practice["hops_added"]
+    assert practice["variants"] == 4 and 0.5 <= meta["practice_force_factor"] <= 2.0
     code = cli.main(["practice", "--models", str(models_dir), "-o", str(models_dir),
                      "--score", str(score), "--quiet"])
     assert code != 0 and "must differ" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("practised", [False, True])
+def test_a_corrected_stroke_starts_at_the_practised_factor(practised):
+    from synth.engines import get_engine
+    from synth.listening.controller import ControllerSettings, play_plan
+
+    model, _, _ = _toy_model()
+    model.metadata["practice_force_factor"] = 1.3
+    plan = _plan(40, [0])
+    plan.velocity[:, 1] = 0.3
+    planned = np.where(plan.bowed, 0.8, 0.0)
+    rules = ControllerSettings(jitter=0.0, trim=1.5, sure=1.01, practised_start=practised)
+    log = play_plan(plan, {(1, "mf"): model}, get_engine("modal", "violin"),
+                    rng=np.random.default_rng(0), settings=rules, planned_force=planned)
+    assert np.allclose(log.force[:, 1], 0.8 * (1.3 if practised else 1.0))

@@ -2,16 +2,21 @@
 
 Basic training judges steady clips; in music the classifier hears what the clips never
 had: bow changes, string crossings, slurred finger changes, short notes, the rules' other
-bow lanes. Practice plays the rules' plan of real parts with the force of each stroke off
-by a seeded factor (one stroke in three as planned, the others log-uniform within
-``1 / spread .. spread``: the controller's working range and beyond), records the slip
-record, lets the teacher judge every sustained hop (:func:`judged_hops`, the same teacher as
-the evaluation) and pairs each judged hop with the features the controller would have heard
-at that hop (the hop loop's own listener, replayed over the audio). Each string x dynamic
-pair is then refitted on its support vectors plus its practice hops
-(:func:`synth.listening.refit.refit_pair`); K and the initial forces are kept. The
-controller still plays black-box: practice is training, where the teacher stands in for the
-human of the paper.
+bow lanes. Practice plays the rules' plan of real parts open loop in several variants, each
+with the force of every stroke off by a seeded factor (one stroke in three as planned, the
+others log-uniform within ``1 / spread .. spread``), records the slip record and lets the
+teacher judge every sustained hop (:func:`judged_hops`, the same teacher as the
+evaluation). The teacher's side of a fault (class 2 "too little" against 4 "too much") is
+a rule of thumb that the variants can check: a hop is labelled with what helped its stroke
+(:func:`direction_labels`: hold, more or less force towards the variant with the most
+class-3 hops). Each label is paired with the features the controller would have heard at
+that hop (the hop loop's own listener, replayed over the audio), and each string x dynamic
+pair is refitted on its support vectors plus its practice hops
+(:func:`synth.listening.refit.refit_pair`); K and the initial forces are kept, and the
+factor under which the pair's strokes sounded best is stored
+(:mod:`pipelines.listening.practice_refit`).
+The controller still plays black-box: practice is training, where the teacher stands in
+for the human of the paper.
 """
 
 from __future__ import annotations
@@ -106,9 +111,17 @@ def heard_features(plan: HopPlan, audio: np.ndarray, sample_rate: int) -> np.nda
 
 
 def practice_part(notes: pd.DataFrame, config: dict[str, Any], models: dict, *,
-                  instrument: str, seed: int, spread: float = 2.0,
+                  instrument: str, seed: int, spread: float = 2.0, variants: int = 4,
                   sample_rate: int = 44100) -> pd.DataFrame:
-    """Play one part open loop at per-stroke force factors and judge every hop.
+    """Play one part open loop in variants of per-stroke force factors; label every hop.
+
+    The rules plan the part once; each variant plays that plan with its own factor per
+    stroke (:func:`stroke_factors`). The teacher judges every sustained hop of every
+    variant; each stroke's best variant is the one with the most class-3 hops (ties: the
+    factor nearest 1). A hop's label is what the controller should do there
+    (:func:`direction_labels`): 3 (hold the force) where the teacher hears class 3, or where
+    no variant of the stroke sounded better; else 2 (more force) or 4 (less) towards the
+    best variant's factor. The teacher's own class is kept as ``teacher_label``.
 
     Parameters
     ----------
@@ -123,38 +136,56 @@ def practice_part(notes: pd.DataFrame, config: dict[str, Any], models: dict, *,
         Seed of the rules' jitter, the factors and the instrument.
     spread : float
         See :func:`stroke_factors`.
+    variants : int
+        Renders of the part, at least 2.
     sample_rate : int, Hz
 
     Returns
     -------
     pandas.DataFrame
-        One row per judged sustained hop with features: ``string``, ``dynamic``, ``hop``,
-        ``label`` (class 1..5), ``factor`` and one column per feature name.
+        One row per judged sustained hop with features: ``variant``, ``string``,
+        ``stroke`` (index on its string), ``dynamic``, ``hop``, ``label``,
+        ``teacher_label``, ``factor`` and one column per feature name.
     """
-    from pipelines.methods.feedback import (
-        TAIL,
-        diagnostics_table,
-        hop_plan,
-        planned_forces,
-        played_actions,
-    )
+    from pipelines.methods.feedback import hop_plan, planned_forces
     from pipelines.perform.rules import fermata_warp, perform_part
+
+    if variants < 2:
+        raise ParameterError(f"variants={variants}: practice compares at least 2 renders")
+    warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    perf = perform_part(notes, config, instrument=instrument, rng=np.random.default_rng(seed),
+                        warp=warp)
+    plan, span = hop_plan(perf, config, instrument, sample_rate=sample_rate)
+    planned = planned_forces(perf, plan, sample_rate)
+    frames = []
+    for v in range(variants):
+        factors = stroke_factors(plan, np.random.default_rng([seed, 2, v]), spread)
+        hops = _play_variant(perf, plan, span, planned, factors, models, instrument=instrument,
+                             seed=seed, sample_rate=sample_rate)
+        hops.insert(0, "variant", v)
+        frames.append(hops)
+    hops = pd.concat(frames, ignore_index=True)
+    hops.insert(hops.columns.get_loc("label") + 1, "teacher_label", hops["label"])
+    hops["label"] = direction_labels(hops)
+    return hops
+
+
+def _play_variant(perf, plan: HopPlan, span: np.ndarray, planned: np.ndarray,
+                  factors: np.ndarray, models: dict, *, instrument: str, seed: int,
+                  sample_rate: int) -> pd.DataFrame:
+    """One open-loop render at ``planned * factors``: its judged hops with features."""
+    from pipelines.methods.feedback import TAIL, diagnostics_table, played_actions
     from synth.engines import get_engine
     from synth.listening.controller import play_plan
 
-    rng = np.random.default_rng(seed)
-    warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
-    perf = perform_part(notes, config, instrument=instrument, rng=rng, warp=warp)
-    plan, span = hop_plan(perf, config, instrument, sample_rate=sample_rate)
-    factors = stroke_factors(plan, np.random.default_rng([seed, 2]), spread)
     inst = get_engine("modal", instrument, sample_rate=sample_rate, seed=seed)
     log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 1]),
                     settings=OPEN_LOOP, record_diagnostics=True,
-                    planned_force=planned_forces(perf, plan, sample_rate) * factors)
+                    planned_force=planned * factors)
     tail = inst.process(int(TAIL * sample_rate), {}, diagnostics=False).audio
-    audio = np.concatenate([log.audio, tail])
     actions = played_actions(perf, plan, span, log, sample_rate=sample_rate)
-    judged = judged_hops(audio, actions, diagnostics=diagnostics_table(log, sample_rate),
+    judged = judged_hops(np.concatenate([log.audio, tail]), actions,
+                         diagnostics=diagnostics_table(log, sample_rate),
                          instrument=instrument, sample_rate=sample_rate)
     return _with_features(judged, plan, factors, heard_features(plan, log.audio, sample_rate))
 
@@ -174,14 +205,52 @@ def _with_features(judged: pd.DataFrame, plan: HopPlan, factors: np.ndarray,
     out.insert(0, "label", labels[heard])
     out.insert(0, "hop", k[heard])
     out.insert(0, "dynamic", plan.dynamic[k, s][heard].astype(str))
+    out.insert(0, "stroke", (np.cumsum(plan.note_start, axis=0) - 1)[k, s][heard])
     out.insert(0, "string", s[heard])
     return out
 
 
+def direction_labels(hops: pd.DataFrame, tolerance: float = 1.05) -> np.ndarray:
+    """What the controller should do at each hop, from the variants of its stroke.
+
+    Parameters
+    ----------
+    hops : pandas.DataFrame
+        Columns ``variant``, ``string``, ``stroke``, ``factor`` and ``teacher_label``.
+    tolerance : float
+        Factors within this ratio count as the same force.
+
+    Returns
+    -------
+    np.ndarray [shape=(len(hops),)], int
+        3 where the teacher heard class 3 or the hop's factor is its stroke's best; else 2
+        (the best factor is higher) or 4 (lower).
+
+    Examples
+    --------
+    >>> hops = pd.DataFrame({"variant": [0, 0, 1, 1], "string": 1, "stroke": 0,
+    ...                      "factor": [1.0, 1.0, 1.6, 1.6], "teacher_label": [2, 2, 3, 2]})
+    >>> direction_labels(hops).tolist()  # variant 1 sounded better: more force
+    [2, 2, 3, 3]
+    """
+    keys = ["string", "stroke"]
+    per = (hops.assign(good=hops["teacher_label"] == 3,
+                       distance=np.abs(np.log(hops["factor"])))
+           .groupby([*keys, "variant"], sort=False)
+           .agg(share=("good", "mean"), distance=("distance", "first"),
+                best=("factor", "first")).reset_index())
+    per = per.sort_values([*keys, "share", "distance"], ascending=[True, True, False, True])
+    best = per.groupby(keys, sort=False)["best"].first()
+    target = best.reindex(pd.MultiIndex.from_frame(hops[keys])).to_numpy(np.float64)
+    f = hops["factor"].to_numpy(np.float64)
+    direction = np.where(target > f * tolerance, 2, np.where(target < f / tolerance, 4, 3))
+    return np.where(hops["teacher_label"].to_numpy() == 3, 3, direction).astype(np.int64)
+
+
 def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
                   models_dir: str | os.PathLike, *, config: dict[str, Any],
-                  seeds: Sequence[int], spread: float = 2.0, workers: int = 1,
-                  progress: bool = True) -> pd.DataFrame:
+                  seeds: Sequence[int], spread: float = 2.0, variants: int = 4,
+                  workers: int = 1, progress: bool = True) -> pd.DataFrame:
     """Judged practice hops of every part of ``instrument`` in the excerpts, every seed.
 
     Parameters
@@ -196,6 +265,8 @@ def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
         One practice render of every part per seed.
     spread : float
         See :func:`stroke_factors`.
+    variants : int
+        Renders of every part per seed (see :func:`practice_part`).
     workers : int
         Local processes.
     progress : bool
@@ -224,7 +295,7 @@ def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
             part = notes[notes["part_index"] == i]
             if len(part) and str(part["instrument"].iloc[0]) == instrument:
                 jobs += [(f"{Path(ex.path).stem}#{i}", part, seed, config, str(models_dir),
-                          instrument, spread) for seed in seeds]
+                          instrument, spread, variants) for seed in seeds]
     if not jobs:
         raise ParameterError(f"practice: no {instrument} part in "
                              f"{[Path(e.path).name for e in excerpts]}")
@@ -242,108 +313,17 @@ def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
 def _practice_job(job: tuple) -> pd.DataFrame:
     from synth.listening.classifier import load_models
 
-    name, part, seed, config, models_dir, instrument, spread = job
+    name, part, seed, config, models_dir, instrument, spread, variants = job
     hops = practice_part(part, config, load_models(models_dir, instrument),
-                         instrument=instrument, seed=seed, spread=spread)
+                         instrument=instrument, seed=seed, spread=spread, variants=variants)
     hops.insert(0, "seed", seed)
     hops.insert(0, "part", name)
     return hops
 
 
-def refit_models(hops: pd.DataFrame, models_in: str | os.PathLike, out_dir: str | os.PathLike,
-                 instrument: str, *, weight: float = 1.0, max_hops: int = 4000,
-                 seed: int = 0, record: dict[str, Any] | None = None) -> list[dict[str, Any]]:
-    """Refit every pair of ``instrument`` in ``models_in`` with its practice hops.
-
-    Each hop goes to the pair the controller listens with at its string and dynamic (the
-    nearest trained dynamic of the string when its own is missing). Pairs without practice
-    hops are written unchanged. At most ``max_hops`` hops per pair are used (a seeded
-    sample).
-
-    Parameters
-    ----------
-    hops : pandas.DataFrame
-        Output of :func:`practice_hops`.
-    models_in, out_dir : path-like
-        Trained pairs read, refitted pairs written (complete, with ``practice`` metadata:
-        ``record`` plus the hops added and the agreement with the teacher before and after).
-    instrument : str
-    weight : float
-        Weight of a practice hop relative to a support vector.
-    max_hops : int
-    seed : int
-        Seed of the sample.
-    record : dict, optional
-        What was practised (pieces, seeds, spread), kept in each pair's metadata.
-
-    Returns
-    -------
-    list of dict
-        Per pair: ``key``, ``hops_added``, ``class_counts`` of the added hops, and the share
-        of them on which the classifier agrees with the teacher before and after.
-    """
-    from synth.listening.classifier import DYNAMICS, load_models, load_pair, save_pair
-    from synth.listening.controller import model_for
-    from synth.listening.refit import refit_pair
-
-    rng = np.random.default_rng(seed)
-    trained = load_models(models_in, instrument)
-    # Each hop goes to the pair the controller listens with (a missing dynamic's hops to
-    # the nearest trained dynamic of the string).
-    pair_of = {(s, d): model_for(trained, s, d).dynamic
-               for s, d in set(zip(hops["string"], hops["dynamic"], strict=True))
-               if any(k[0] == s for k in trained)}
-    used = np.array([pair_of.get((s, d), "") for s, d in zip(hops["string"], hops["dynamic"],
-                                                            strict=True)], object)
-    summary = []
-    for s, d in sorted(trained, key=lambda k: (k[0], DYNAMICS.index(k[1]))):
-        model = load_pair(models_in, instrument, s, d)  # as stored (no monotone forces)
-        rows = hops[(hops["string"] == s).to_numpy() & (used == d)]
-        if len(rows) > max_hops:
-            rows = rows.iloc[np.sort(rng.choice(len(rows), max_hops, replace=False))]
-        X = rows[list(FEATURE_NAMES)].to_numpy(np.float64)
-        y = rows["label"].to_numpy(np.int64)
-        new = refit_pair(model, X, y, weight=weight) if y.size else model
-        entry = {"key": model.key, "hops_added": int(y.size),
-                 "class_counts": {str(c): int(n) for c, n in
-                                  zip(*np.unique(y, return_counts=True), strict=True)},
-                 "agreement_before": _agreement(model, X, y),
-                 "agreement_after": _agreement(new, X, y),
-                 "agreement_unheard": _unheard_agreement(
-                     model, X, y, rows["seed"].to_numpy() if "seed" in rows else None, weight)}
-        new.metadata.update(complete=True, practice={**(record or {}), **entry})
-        save_pair(new, out_dir)
-        summary.append(entry)
-    return summary
-
-
-def _unheard_agreement(model: Any, X: np.ndarray, y: np.ndarray, seeds: np.ndarray | None,
-                       weight: float) -> float:
-    """Agreement with the teacher on each seed's hops, refitted without them (mean).
-
-    NaN with fewer than two seeds: the agreement on the practice hops themselves is then
-    the only one (and an optimistic one).
-    """
-    from synth.listening.refit import refit_pair
-
-    if seeds is None or np.unique(seeds).size < 2:
-        return float("nan")
-    scores = []
-    for held in np.unique(seeds):
-        train = seeds != held
-        refit = refit_pair(model, X[train], y[train], weight=weight)
-        scores.append(_agreement(refit, X[~train], y[~train]))
-    return float(np.mean(scores))
-
-
-def _agreement(model: Any, X: np.ndarray, y: np.ndarray) -> float:
-    """Share of hops whose class the model gives as the teacher did (NaN without hops)."""
-    return float(np.mean(model.predict(X) == y)) if y.size else float("nan")
-
-
 def practise(instrument: str, models_in: str | os.PathLike, out_dir: str | os.PathLike,
              excerpts: Sequence[Excerpt], *, config: dict[str, Any], seeds: Sequence[int],
-             spread: float = 2.0, workers: int = 1,
+             spread: float = 2.0, variants: int = 4, workers: int = 1,
              progress: bool = True) -> list[dict[str, Any]]:
     """Practise ``instrument``'s parts of the excerpts and write the refitted pairs.
 
@@ -364,6 +344,7 @@ def practise(instrument: str, models_in: str | os.PathLike, out_dir: str | os.Pa
     """
     import shutil
 
+    from pipelines.listening.practice_refit import refit_models
     from synth.listening.classifier import load_models
 
     src, dst = Path(models_in), Path(out_dir)
@@ -372,7 +353,8 @@ def practise(instrument: str, models_in: str | os.PathLike, out_dir: str | os.Pa
                              f"--models {models_in}")
     load_models(src, instrument)  # a clear error before any rendering
     hops = practice_hops(excerpts, instrument, src, config=config, seeds=seeds,
-                         spread=spread, workers=workers, progress=progress)
+                         spread=spread, variants=variants, workers=workers,
+                         progress=progress)
     dst.mkdir(parents=True, exist_ok=True)
     for f in src.glob("*.*"):
         if f.is_file() and f.suffix in (".json", ".npz") and not (dst / f.name).exists():
@@ -380,9 +362,10 @@ def practise(instrument: str, models_in: str | os.PathLike, out_dir: str | os.Pa
     record = {"excerpts": [[Path(e.path).name, e.start_measure, e.end_measure]
                            for e in excerpts],
               "seeds": [int(x) for x in seeds], "spread": float(spread),
+              "variants": int(variants), "labels": "direction (practice variants)",
               "from_models": str(src)}
     return refit_models(hops, src, dst, instrument, record=record)
 
 
 __all__ = ["AS_PLANNED", "OPEN_LOOP", "Excerpt", "heard_features", "practice_hops",
-           "practice_part", "practise", "refit_models", "stroke_factors"]
+           "direction_labels", "practice_part", "practise", "stroke_factors"]

@@ -38,6 +38,9 @@ TAIL = 1.0  # s of ring-out after the last hop
 #: class probabilities. Measured on Haydn op. 74/1 i, m. 1-8, seed 0 (bench/feedback_vs_rules.py):
 #: unbounded, misjudged hops drove the viola's factor to 0.08-3.5 (Helmholtz share 0.85
 #: against the rules' 0.98); trim 2 -> 0.72, trim 2 + 85 % -> 0.95, trim 1.5 + 85 % -> 0.98.
+#: Each stroke starts at factor 1: starting at the pair's practised factor
+#: (``practised_start``) cost Helmholtz share on the tuning set (seeds 3 / 4, all parts:
+#: 0.911 -> 0.907, 0.920 -> 0.912; attacks within 50 ms 0.54 -> 0.58, 0.52 -> 0.56).
 FEEDBACK_SETTINGS = ControllerSettings(range_margin=0.0, trim=1.5, sure=0.85)
 
 

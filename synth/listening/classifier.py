@@ -89,6 +89,11 @@ class PairModel:
         """Force factor of the control law (1.0 until trained)."""
         return float(self.metadata.get("K", 1.05))
 
+    @property
+    def start_factor(self) -> float:
+        """Factor of the planned force a corrected stroke starts at (practice; else 1)."""
+        return float(self.metadata.get("practice_force_factor", 1.0))
+
     def initial_force(self, semitones: float) -> float:
         """Initial bow force (N) at a finger position, interpolated linearly in semitones."""
         forces = self.metadata.get("initial_forces")

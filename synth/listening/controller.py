@@ -10,9 +10,8 @@ per hop, so a 2x error is corrected in ``log 2 / log step`` hops (6 at the defau
 applies only while the bow moves faster than half the target velocity and does not
 decelerate. The trained K (1.005-1.05, 14-140 hops for a 2x error: longer than most notes)
 is kept in the model's metadata but the played law uses ``step``. Force and velocity get
-1 % Gaussian jitter each hop (a seeded generator); ``F >= 0``. A note starts at the initial
-force of its pair, interpolated by finger position (or, correcting a planned force, at a
-factor of 1).
+1 % Gaussian jitter each hop (a seeded generator); ``F >= 0``. A note starts at its pair's
+initial force by finger (correcting a planned force: at 1 or the practised factor).
 
 :func:`play_plan` plays a :class:`HopPlan` (per-hop controls planned by the rules: string,
 finger, velocity, beta, pair, note starts) with the controller owning the force.
@@ -60,6 +59,9 @@ class ControllerSettings:
         were heard as classes 4-5 and pulled the force down).
     trim : float
         Correcting a planned force: the factor stays within ``1 / trim .. trim`` (0: off).
+    practised_start : bool
+        Correcting a planned force: each stroke starts at its pair's practised factor
+        (:attr:`PairModel.start_factor`, learned by ``arco practice``) instead of 1.
     sure : float
         No correction while neither side ("too little": classes 1-2, "too much": 4-5)
         holds at least this probability (0: off).
@@ -81,6 +83,7 @@ class ControllerSettings:
     change_hops: int = 8
     trim: float = 0.0
     sure: float = 0.0
+    practised_start: bool = False
 
 
 class ForceController:
@@ -298,8 +301,7 @@ def play_plan(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrumen
     initial_force : float, optional
         Override every note's initial force, N (training).
     record_diagnostics : bool
-        Keep the instrument's per-hop contact diagnostics (for the evaluation; the
-        controller never sees them).
+        Keep the per-hop contact diagnostics (for the evaluation; never for the controller).
     planned_force : np.ndarray [shape=(n, n_strings)], N, optional
         Force to correct instead of choosing one.
     force_range : (np.ndarray, np.ndarray), each [shape=(n, n_strings)], N, optional
@@ -314,8 +316,7 @@ def play_plan(plan: HopPlan, models: dict[tuple[int, str], PairModel], instrumen
                     planned_force=planned_force, force_range=force_range)
     for k in range(plan.n_hops):
         controls = loop.controls(k)
-        plucks = plan.plucks[k] if plan.plucks else ()
-        block = instrument.process(HOP, controls, plucks=plucks,
+        block = instrument.process(HOP, controls, plucks=plan.plucks[k] if plan.plucks else (),
                                    diagnostics=record_diagnostics)
         loop.hear(k, block, controls)
     return loop.log()
@@ -336,8 +337,7 @@ class _HopLoop:
         n, n_strings = plan.bowed.shape
         self.n_hops, self.n_strings, self.sample_rate = n, n_strings, sample_rate
         self.models, self.rng, self.settings, self.K = models, rng, settings, K
-        self.initial_force = initial_force
-        self.corrects = planned_force is not None
+        self.initial_force, self.corrects = initial_force, planned_force is not None
         self.record_diagnostics = record_diagnostics
         self.listeners: dict[int, StreamingFeatures] = {}
         self.controllers: dict[int, ForceController] = {}
@@ -346,12 +346,12 @@ class _HopLoop:
         self.features: dict[int, np.ndarray | None] = {}
         self.audio = np.zeros(n * HOP, np.float32)
         # Logs as flat lists (entry k * n_strings + s), arrays at the end.
-        self.force_log = [0.0] * (n * n_strings)
-        self.vel_log = [0.0] * (n * n_strings)
+        self.force_log, self.vel_log = [0.0] * (n * n_strings), [0.0] * (n * n_strings)
         self.classes = [0] * (n * n_strings)
         self.diag: dict[int, list] = ({s: [] for s in range(n_strings)}
                                       if record_diagnostics else {})
         self.jitter = (settings or ControllerSettings()).jitter
+        self.start = (settings or ControllerSettings()).practised_start
         (self.first_bowed, self.bowed_strings, self.velocity, self.beta, self.semitones,
          self.expected_f0, self.target_speed, self.dynamic, self.note_start,
          self.finger_change) = _flat_plan(plan)
@@ -378,7 +378,8 @@ class _HopLoop:
         """Start a note, rescale at a finger change, or apply the control law (entry i)."""
         semitones = self.semitones
         if self.note_start[i]:
-            ctl.start_note(semitones[i], self.initial_force if not self.corrects else 1.0)
+            ctl.start_note(semitones[i], self.initial_force if not self.corrects
+                           else model.start_factor if self.start else 1.0)
             self.features[s] = None
         elif self.finger_change[i] and not self.corrects:
             old = semitones[i - self.n_strings] if k else semitones[i]

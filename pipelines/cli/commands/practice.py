@@ -1,9 +1,9 @@
 """``arco practice --instrument violin --models models/ -o practised/``: practise on music.
 
-Vivi 2011, section 5.3: the instrument's parts of real music are played open loop at
-per-stroke force factors, the teacher judges every sustained hop, and each string x dynamic
-classifier is refitted on its support vectors plus those hops
-(:mod:`pipelines.listening.practice`).
+Vivi 2011, section 5.3: the instrument's parts of real music are played open loop in
+variants of per-stroke force factors, the teacher judges every sustained hop, each hop is
+labelled with the way its stroke's best variant lay, and each string x dynamic classifier
+is refitted on its support vectors plus those hops (:mod:`pipelines.listening.practice`).
 """
 
 from __future__ import annotations
@@ -40,6 +40,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="practice renders of every part: N seeds 0..N-1 or a list (default 2)")
     p.add_argument("--spread", type=float, default=2.0,
                    help="largest per-stroke force factor and 1/smallest (default 2)")
+    p.add_argument("--variants", type=positive_int, default=4,
+                   help="renders of every part per seed, each at its own factors; a hop's "
+                        "label says which way its stroke's best variant lay (default 4)")
     p.add_argument("--config", metavar="RULES.toml", help="rules settings")
     p.add_argument("--workers", type=positive_int, default=1, help="local worker processes")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -61,20 +64,25 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.spread > 1.0:
         raise ParameterError(f"--spread {args.spread} must be > 1")
+    if args.variants < 2:
+        raise ParameterError(f"--variants {args.variants} must be >= 2 (practice compares "
+                             "renders of the same strokes)")
     output_dir(args.output)
     start, end = _measures(args.measures)
     excerpts = [Excerpt(str(path), start, end) for path in (args.score or [bundled_score()])]
     chosen = list(range(args.seeds)) if isinstance(args.seeds, int) else args.seeds
     summary = practise(args.instrument, args.models, args.output, excerpts,
                        config=load_config(args.config), seeds=chosen, spread=args.spread,
-                       workers=args.workers, progress=not args.quiet)
+                       variants=args.variants, workers=args.workers,
+                       progress=not args.quiet)
     for r in summary:
         if r["hops_added"]:
             unheard = r["agreement_unheard"]
             held = "" if unheard != unheard else f", on unheard seeds {100 * unheard:.1f} %"
-            print(f"{r['key']}: {r['hops_added']} hops {r['class_counts']}, agreement with "
-                  f"the teacher {100 * r['agreement_before']:.1f} % -> "
-                  f"{100 * r['agreement_after']:.1f} %{held}")
+            print(f"{r['key']}: {r['hops_added']} hops {r['class_counts']}, agreement "
+                  f"{100 * r['agreement_before']:.1f} % -> {100 * r['agreement_after']:.1f} %"
+                  f"{held}; best factor {r['force_factor']:.2f} (class 3 "
+                  f"{r['class3_gain']:+.3f})")
         else:
             print(f"{r['key']}: no practice hops (copied unchanged)")
     return 0
