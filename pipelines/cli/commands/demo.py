@@ -6,10 +6,8 @@
    every part on its own instrument (``mozart-k421-rules.wav``, actions, bowing plot);
 3. gesture sampling against feedback control: simulate a small set of bowing recordings,
    build the gesture database, train the listening models of violin, viola and cello
-   (quick settings; reused when ``out/models`` already holds them), let them practise on
-   K. 421 measures 9-16 (``arco practice``: the classifiers refitted on judged hops of real
-   music, ``out/models-practised``), play the quartet's opening with feedback control,
-   every part with its own instrument's practised models
+   (quick settings; reused when ``out/models`` already holds them), play the quartet's
+   opening with feedback control, every part with its own instrument's models
    (``mozart-k421-feedback.wav``), and compare rules, feedback, sampling and open-loop
    sampling on the first violin's opening with two seeds (``report/index.html``,
    ``report/results.json``);
@@ -52,12 +50,6 @@ DEMO_PERFORMERS = 3
 DEMO_INSTRUMENT_NOTES = {"violin": 2000, "viola": 1000, "cello": 1000}
 #: Samples per group and instrument the demo judges by playing them (``arco db judge``).
 DEMO_JUDGED_PER_GROUP = 3
-#: Measures of K. 421 the listening models practise on (not those the demo compares on).
-DEMO_PRACTICE_MEASURES = (9, 16)
-#: Practice renders of every part.
-DEMO_PRACTICE_SEEDS = 2
-#: Directory (under the demo's output) of the practised listening models.
-PRACTISED = "models-practised"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -176,17 +168,12 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
         *(["train", "--instrument", name, "--teacher", "auto", "--quick",
            "-o", str(out / "models"), "--workers", str(workers), "--seed", str(seed)]
           for name in INSTRUMENT_NAMES),
-        *(["practice", "--instrument", name, "--models", str(out / "models"),
-           "-o", str(out / PRACTISED), "--measures",
-           "-".join(map(str, DEMO_PRACTICE_MEASURES)), "--seeds", str(DEMO_PRACTICE_SEEDS),
-           "--workers", str(workers), "--quiet"] for name in INSTRUMENT_NAMES),
-        ["render", str(bundled_score()), "--method", "feedback",
-         "--models", str(out / PRACTISED),
+        ["render", str(bundled_score()), "--method", "feedback", "--models", str(out / "models"),
          "--all-parts", "--start-measure", str(DEMO_MEASURES[0]), "--end-measure",
          str(DEMO_MEASURES[1]), "--seed", str(seed), "--quiet",
          "-o", str(out / f"{bundled_score().stem}-feedback.wav")],
         ["compare", str(bundled_score()), "--methods", "rules,feedback,sampling,sampling-open",
-         "--db", str(out / "db"), "--models", str(out / PRACTISED), "--part", "0",
+         "--db", str(out / "db"), "--models", str(out / "models"), "--part", "0",
          "--start-measure", str(DEMO_MEASURES[0]), "--end-measure", str(DEMO_MEASURES[1]),
          "--seeds", str(DEMO_SEEDS), "--workers", str(workers), "--quiet",
          "-o", str(out / "report")],
@@ -198,8 +185,7 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
         code = main(step)
         if code != 0:
             raise RuntimeError(f"demo step failed: arco {' '.join(step)}")
-        label = {"db": f"db {step[1]}", "train": f"train {step[2]}",
-                 "practice": f"practice {step[2]}"}.get(step[0], step[0])
+        label = {"db": f"db {step[1]}", "train": f"train {step[2]}"}.get(step[0], step[0])
         timings.append((label, time.perf_counter() - start))
     results = json.loads((out / "report" / "results.json").read_text())
     stem = bundled_score().stem
@@ -208,10 +194,8 @@ def sampling_story(out: Path, seed: int, workers: int) -> list[str]:
              f"{DEMO_INSTRUMENT_NOTES['cello']} cello simulated notes by {performers} "
              f"performers each -> gesture database ({DEMO_JUDGED_PER_GROUP} samples per "
              "group and instrument judged by playing them) -> "
-             "listening models for the 16 string x dynamic pairs of violin, viola and cello, "
-             f"practised on K. 421 m. {DEMO_PRACTICE_MEASURES[0]}-{DEMO_PRACTICE_MEASURES[1]} "
-             f"({DEMO_PRACTICE_SEEDS} seeds; `{PRACTISED}/`) (all four parts of K. 421 played "
-             f"with feedback control: `{stem}-feedback.wav`) "
+             "listening models for the 16 string x dynamic pairs of violin, viola and cello "
+             f"(all four parts of K. 421 played with feedback control: `{stem}-feedback.wav`) "
              f"-> the first violin of K. 421, measures {DEMO_MEASURES[0]}-{DEMO_MEASURES[1]}, "
              f"played four ways with {DEMO_SEEDS} seeds. Full report with audio and bowing "
              "plots: `report/index.html`.", "", f"**{results['verdict']}**", "",
@@ -256,7 +240,7 @@ def heldout_story(out: Path, workers: int) -> list[str]:
     except ParameterError as exc:
         print(f"held-out protocol skipped: {exc}")
         return [*head, f"Not run: {exc}.", ""]
-    models = out / PRACTISED
+    models = out / "models"
     listening = all((models / f"{pair_key(i, 0, DYNAMICS[0])}.json").exists()
                     for i in ("violin", "viola", "cello"))
     methods = "rules,feedback,sampling,sampling-open" if listening else "rules,sampling-open"
