@@ -229,3 +229,29 @@ def test_a_corrected_stroke_starts_at_the_practised_factor(practised):
     log = play_plan(plan, {(1, "mf"): model}, get_engine("modal", "violin"),
                     rng=np.random.default_rng(0), settings=rules, planned_force=planned)
     assert np.allclose(log.force[:, 1], 0.8 * (1.3 if practised else 1.0))
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (["--measures", "3-1"], "--measures '3-1'"),
+    (["--variants", "1"], "--variants 1 must be >= 2"),
+    (["--spread", "1.0"], "--spread 1.0 must be > 1"),
+])
+def test_practice_cli_one_line_errors(tmp_path, capsys, extra, message):
+    code = cli.main(["practice", "--models", str(tmp_path / "m"), "-o", str(tmp_path / "o"),
+                     "--quiet", *extra])
+    assert code != 0 and message in capsys.readouterr().err
+
+
+def test_practice_needs_models_and_a_part_of_the_instrument(models_dir, tmp_path, capsys):
+    from music21 import instrument, note, stream
+
+    violin = _d_string_score(tmp_path / "d.musicxml")
+    code = cli.main(["practice", "--instrument", "cello", "--models", str(models_dir), "-o",
+                     str(tmp_path / "o"), "--score", str(violin), "--quiet"])
+    assert code != 0 and "no trained cello models" in capsys.readouterr().err
+    part = stream.Part([instrument.Violoncello(), note.Note("C3", quarterLength=4)])
+    cello = tmp_path / "c.musicxml"
+    stream.Score([part]).write("musicxml", fp=str(cello))
+    code = cli.main(["practice", "--models", str(models_dir), "-o", str(tmp_path / "o"),
+                     "--score", str(cello), "--measures", "1-1", "--quiet"])
+    assert code != 0 and "no violin part in ['c.musicxml']" in capsys.readouterr().err
