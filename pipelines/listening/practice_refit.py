@@ -30,10 +30,10 @@ def refit_models(hops: pd.DataFrame, models_in: str | os.PathLike, out_dir: str 
     Parameters
     ----------
     hops : pandas.DataFrame
-        Output of :func:`practice_hops`.
+        Output of :func:`pipelines.listening.practice.practice_hops`.
     models_in, out_dir : path-like
         Trained pairs read, refitted pairs written (complete, with ``practice`` metadata:
-        ``record`` plus the hops added and the agreement with the teacher before and after).
+        ``record`` plus this function's summary entry of the pair).
     instrument : str
     weight : float
         Weight of a practice hop relative to a support vector.
@@ -69,12 +69,12 @@ def refit_models(hops: pd.DataFrame, models_in: str | os.PathLike, out_dir: str 
     for s, d in sorted(trained, key=lambda k: (k[0], DYNAMICS.index(k[1]))):
         model = load_pair(models_in, instrument, s, d)  # as stored (no monotone forces)
         rows = hops[(hops["string"] == s).to_numpy() & (used == d)]
+        factor, gain = practised_factor(rows)  # from every stroke, before any sample
         if len(rows) > max_hops:
             rows = rows.iloc[np.sort(rng.choice(len(rows), max_hops, replace=False))]
         X = rows[list(FEATURE_NAMES)].to_numpy(np.float64)
         y = rows["label"].to_numpy(np.int64)
         new = refit_pair(model, X, y, weight=weight) if y.size else model
-        factor, gain = practised_factor(rows)
         new.metadata["practice_force_factor"] = factor
         entry = {"key": model.key, "hops_added": int(y.size), "force_factor": factor,
                  "class3_gain": gain,
@@ -147,7 +147,7 @@ def practised_factor(rows: pd.DataFrame) -> tuple[float, float]:
 
 def _unheard_agreement(model: Any, X: np.ndarray, y: np.ndarray, seeds: np.ndarray | None,
                        weight: float) -> float:
-    """Agreement with the teacher on each seed's hops, refitted without them (mean).
+    """Agreement with the labels on each seed's hops, refitted without them (mean).
 
     NaN with fewer than two seeds: the agreement on the practice hops themselves is then
     the only one (and an optimistic one).
@@ -165,7 +165,7 @@ def _unheard_agreement(model: Any, X: np.ndarray, y: np.ndarray, seeds: np.ndarr
 
 
 def _agreement(model: Any, X: np.ndarray, y: np.ndarray) -> float:
-    """Share of hops whose class the model gives as the teacher did (NaN without hops)."""
+    """Share of hops whose class the model gives as labelled (NaN without hops)."""
     return float(np.mean(model.predict(X) == y)) if y.size else float("nan")
 
 
