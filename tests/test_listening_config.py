@@ -31,9 +31,10 @@ def test_shipped_file_holds_exactly_the_defaults_in_code():
 
 def test_a_file_of_ones_own_sets_some_keys(tmp_path):
     path = tmp_path / "mine.toml"
-    path.write_text("[controller]\naverage = 4\njitter = 0.0\n[teacher]\nflat_cents = 20\n")
+    path.write_text("[controller]\naverage = 4\njitter = 0.0\npractised_start = true\n"
+                    "[teacher]\nflat_cents = 20\n")
     got = load_listening_settings(path)
-    assert got.controller == ControllerSettings(average=4, jitter=0.0)
+    assert got.controller == ControllerSettings(average=4, jitter=0.0, practised_start=True)
     assert got.teacher == TeacherThresholds(flat_cents=20.0)
     assert isinstance(got.teacher.flat_cents, float)
 
@@ -47,6 +48,7 @@ def test_a_file_of_ones_own_sets_some_keys(tmp_path):
     ("[controller]\nmin_speed_share = 1.5\n", r"controller.min_speed_share = 1.5 is outside"),
     ("[teacher]\nnoise_acf = nan\n", "teacher.noise_acf = nan is outside"),
     ("[controller]\naverage = 0\n", "controller.average = 0 is outside 1..1000"),
+    ("[controller]\npractised_start = 1\n", "controller.practised_start = 1 must be true or"),
     ("controller = 3\n", r"controller must be a table"),
     ("[controller\n", "not valid TOML"),
 ])

@@ -34,6 +34,7 @@ RANGES: dict[str, dict[str, tuple[type, float, float]]] = {
         "change_hops": (int, 0, 100000),
         "trim": (float, 0.0, 100.0),
         "sure": (float, 0.0, 1.0),
+        "practised_start": (bool, 0.0, 1.0),
     },
     "teacher": {
         "silent_db": (float, -200.0, 0.0),
@@ -64,8 +65,13 @@ def default_settings_path() -> Path:
     return Path(str(resources.files("synth.listening") / "config" / "listening.toml"))
 
 
-def _value(raw: object, kind: type, lo: float, hi: float, key: str, source: str) -> float:
-    """``raw`` checked against the key's type and range."""
+def _value(raw: object, kind: type, lo: float, hi: float, key: str,
+           source: str) -> float | bool:
+    """``raw`` checked against the key's type and range (a bool key: true or false)."""
+    if kind is bool:
+        if not isinstance(raw, bool):
+            raise SchemaError(f"{key} = {raw!r} must be true or false", source=source)
+        return raw
     ok_type = not isinstance(raw, bool) and (
         isinstance(raw, int) if kind is int else isinstance(raw, int | float))
     if not ok_type:
