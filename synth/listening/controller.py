@@ -59,9 +59,6 @@ class ControllerSettings:
         were heard as classes 4-5 and pulled the force down).
     trim : float
         Correcting a planned force: the factor stays within ``1 / trim .. trim`` (0: off).
-    practised_start : bool
-        Correcting a planned force: each stroke starts at its pair's practised factor
-        (:attr:`PairModel.start_factor`, learned by ``arco practice``) instead of 1.
     sure : float
         No correction while neither side ("too little": classes 1-2, "too much": 4-5)
         holds at least this probability (0: off).
@@ -71,6 +68,9 @@ class ControllerSettings:
         analysis window and the median attack), so the attack transient does not pull the
         force away. Measured on the 30 s scale of ``bench/feedback_speed.py``: class 3 on
         87 % of sustained hops at 15 hops, 91.5 % at 25, 91.7 % at 35.
+    practised_start : bool
+        Correcting a planned force: each stroke starts at its pair's practised factor
+        (:attr:`PairModel.start_factor`, learned by ``arco practice``) instead of 1.
     """
 
     average: int = 3
