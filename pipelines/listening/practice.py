@@ -286,14 +286,15 @@ def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
 
     from tqdm import tqdm
 
-    from pipelines.methods.render import _select
+    from pipelines.score import read_score
+    from pipelines.score.select import select_measures, select_movement
 
     jobs = []
     for ex in excerpts:
-        _, notes, indices = _select(ex.path, "all", ex.start_measure, ex.end_measure)
-        for i in indices:
-            part = notes[notes["part_index"] == i]
-            if len(part) and str(part["instrument"].iloc[0]) == instrument:
+        notes = select_measures(select_movement(read_score(ex.path), None), ex.start_measure,
+                                ex.end_measure)
+        for i, part in notes.groupby("part_index", sort=True):
+            if str(part["instrument"].iloc[0]) == instrument:
                 jobs += [(f"{Path(ex.path).stem}#{i}", part, seed, config, str(models_dir),
                           instrument, spread, variants) for seed in seeds]
     if not jobs:

@@ -16,6 +16,13 @@ import pandas as pd
 
 from synth.listening.features import FEATURE_NAMES
 
+#: Width of the kernel smoothing the class-3 share over ln(factor).
+FACTOR_BANDWIDTH = 0.2
+#: Smallest gain in class-3 share (over playing as planned) that moves a pair's factor.
+MIN_FACTOR_GAIN = 0.03
+#: Fewest strokes a pair's factor is learned from.
+MIN_STROKES = 8
+
 
 def refit_models(hops: pd.DataFrame, models_in: str | os.PathLike, out_dir: str | os.PathLike,
                  instrument: str, *, weight: float = 1.0, max_hops: int = 4000,
@@ -88,14 +95,6 @@ def refit_models(hops: pd.DataFrame, models_in: str | os.PathLike, out_dir: str 
         save_pair(new, out_dir)
         summary.append(entry)
     return summary
-
-
-#: Width of the kernel smoothing the class-3 share over ln(factor).
-FACTOR_BANDWIDTH = 0.2
-#: Smallest gain in class-3 share (over playing as planned) that moves a pair's factor.
-MIN_FACTOR_GAIN = 0.03
-#: Fewest strokes a pair's factor is learned from.
-MIN_STROKES = 8
 
 
 def practised_factor(rows: pd.DataFrame) -> tuple[float, float]:

@@ -140,8 +140,17 @@ def svc_arrays(pipeline: Any) -> dict[str, np.ndarray]:
     (True, [1, 2])
     """
     scaler, svc = pipeline[0], pipeline[-1]
-    return {"mean": np.asarray(scaler.mean_, np.float64),
-            "scale": np.asarray(scaler.scale_, np.float64),
+    return scaled_svc_arrays(svc, scaler.mean_, scaler.scale_)
+
+
+def scaled_svc_arrays(svc: Any, mean: np.ndarray, scale: np.ndarray) -> dict[str, np.ndarray]:
+    """The :data:`SVC_ARRAYS` of a fitted RBF SVC on standardised features.
+
+    ``mean`` and ``scale`` (feature units) standardised its inputs as ``(x - mean) / scale``
+    (:func:`svc_arrays` takes them from a pipeline's StandardScaler).
+    """
+    return {"mean": np.asarray(mean, np.float64),
+            "scale": np.asarray(scale, np.float64),
             "support_vectors": np.asarray(svc.support_vectors_, np.float64),
             "dual_coef": np.asarray(svc._dual_coef_, np.float64),
             "intercept": np.asarray(svc._intercept_, np.float64),

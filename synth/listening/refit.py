@@ -15,7 +15,7 @@ import warnings
 import numpy as np
 
 from data_schemas.errors import ParameterError
-from synth.listening.classifier import PairModel, data_hash
+from synth.listening.classifier import PairModel, data_hash, scaled_svc_arrays
 from synth.listening.features import FEATURE_NAMES
 
 #: SVC regularisation of the basic training (:func:`synth.listening.classifier.fit_pair`).
@@ -95,14 +95,7 @@ def refit_pair(model: PairModel, features: np.ndarray, labels: np.ndarray, *,
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         svc.fit(Z, target, sample_weight=w)
-    arrays = {"mean": np.asarray(a["mean"], np.float64),
-              "scale": np.asarray(a["scale"], np.float64),
-              "support_vectors": np.asarray(svc.support_vectors_, np.float64),
-              "dual_coef": np.asarray(svc._dual_coef_, np.float64),
-              "intercept": np.asarray(svc._intercept_, np.float64),
-              "n_support": np.asarray(svc._n_support, np.int64),
-              "classes": np.asarray(svc.classes_, np.int64),
-              "gamma": np.asarray(float(a["gamma"]), np.float64)}
+    arrays = scaled_svc_arrays(svc, a["mean"], a["scale"])
     classes, counts = np.unique(y, return_counts=True)
     meta = {**model.metadata, "data_hash": data_hash(np.vstack([sv, X]), target),
             "n_hops": int(target.size),
