@@ -200,7 +200,7 @@ def test_practice_cli_writes_practised_pairs(models_dir, tmp_path, capsys):
     score = _d_string_score(tmp_path / "d.musicxml")
     out = tmp_path / "practised"
     code = cli.main(["practice", "--models", str(models_dir), "-o", str(out), "--score",
-                     str(score), "--measures", "1-1", "--seeds", "2", "--quiet"])
+                     str(score), "--end-measure", "1", "--seeds", "2", "--quiet"])
     text, err = capsys.readouterr()
     assert code == 0, err
     assert "violin-1-mf:" in text and "on unheard seeds" in text and "best factor" in text
@@ -232,7 +232,7 @@ def test_a_corrected_stroke_starts_at_the_practised_factor(practised):
 
 
 @pytest.mark.parametrize(("extra", "message"), [
-    (["--measures", "3-1"], "--measures '3-1'"),
+    (["--start-measure", "3", "--end-measure", "1"], "--end-measure 1 is before --start-measure 3"),
     (["--variants", "1"], "--variants 1 must be >= 2"),
     (["--spread", "1.0"], "--spread 1.0 must be > 1"),
 ])
@@ -253,5 +253,5 @@ def test_practice_needs_models_and_a_part_of_the_instrument(models_dir, tmp_path
     cello = tmp_path / "c.musicxml"
     stream.Score([part]).write("musicxml", fp=str(cello))
     code = cli.main(["practice", "--models", str(models_dir), "-o", str(tmp_path / "o"),
-                     "--score", str(cello), "--measures", "1-1", "--quiet"])
+                     "--score", str(cello), "--end-measure", "1", "--quiet"])
     assert code != 0 and "no violin part in ['c.musicxml']" in capsys.readouterr().err

@@ -34,8 +34,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "copied there when missing)")
     p.add_argument("--score", action="append", metavar="FILE",
                    help="score to practise on (repeatable; default: the bundled K. 421)")
-    p.add_argument("--measures", default="1-8", metavar="A-B",
-                   help="measures of each score's first movement, inclusive (default 1-8)")
+    p.add_argument("--start-measure", type=positive_int, default=1, metavar="M",
+                   help="first measure of each score's first movement (default 1)")
+    p.add_argument("--end-measure", type=positive_int, default=8, metavar="M",
+                   help="last measure, inclusive (default 8)")
     p.add_argument("--seeds", type=seeds, default=2, metavar="N|S1,S2",
                    help="practice renders of every part: N seeds 0..N-1 or a list (default 2)")
     p.add_argument("--spread", type=float, default=2.0,
@@ -47,13 +49,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=positive_int, default=1, help="local worker processes")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
-
-
-def _measures(text: str) -> tuple[int, int]:
-    a, _, b = text.partition("-")
-    if not (a.strip().isdigit() and b.strip().isdigit()) or not 1 <= int(a) <= int(b):
-        raise ParameterError(f"--measures {text!r}: write A-B with 1 <= A <= B, e.g. 1-8")
-    return int(a), int(b)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -68,7 +63,9 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--variants {args.variants} must be >= 2 (practice compares "
                              "renders of the same strokes)")
     output_dir(args.output)
-    start, end = _measures(args.measures)
+    start, end = args.start_measure, args.end_measure
+    if end < start:
+        raise ParameterError(f"--end-measure {end} is before --start-measure {start}")
     excerpts = [Excerpt(str(path), start, end) for path in (args.score or [bundled_score()])]
     chosen = list(range(args.seeds)) if isinstance(args.seeds, int) else args.seeds
     summary = practise(args.instrument, args.models, args.output, excerpts,
