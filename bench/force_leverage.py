@@ -1,8 +1,9 @@
-"""What choosing the bow force can buy on this string model, against what chance buys.
+"""What choosing the bow force (or speed, or beta) can buy on this string, against chance.
 
 Usage::
 
     python bench/force_leverage.py [--json] [--plot PNG] [--quick] [--workers 2]
+                                   [--parameter bow_force|bow_velocity|beta] [--factors F ...]
 
 The rules plan every part of their tuning set once (:data:`bow_change.MUSIC`: Mozart K. 421
 and Haydn op. 76/2 and op. 74/1, m. 1-8, all four parts; seed 0, rehearsed as the rules
@@ -20,6 +21,7 @@ factor 1 is what picking among chance draws of the same bowing buys. A force con
 listening loop, practice, initial forces from context) has something to work with only where
 the first exceeds the second: ``leverage`` is their difference in class-3 share of the
 sustained hops. The uniform factors show where the planned force sits in the model's window.
+``--parameter`` scales the bow speed or beta instead (the other columns as planned).
 ``--quick`` plays K. 421 alone. About 6 minutes on 2 cores (``--quick``: 2).
 """
 
@@ -41,6 +43,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 FACTORS = (0.5, 0.71, 1.0, 1.41, 2.0)
 RESEEDS = 4
 INSTRUMENTS = ("violin", "viola", "cello")
+#: Columns of the actions table a factor may scale.
+PARAMETERS = ("bow_force", "bow_velocity", "beta")
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -50,6 +54,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--quick", action="store_true", help="K. 421 only")
     p.add_argument("--factors", type=float, nargs="+", default=list(FACTORS),
                    help="uniform force factors (1 is added when missing)")
+    p.add_argument("--parameter", choices=PARAMETERS, default="bow_force",
+                   help="bowing parameter the factors scale (default bow_force)")
     p.add_argument("--reseeds", type=int, default=RESEEDS,
                    help="synthesizer seeds besides 0 played at factor 1")
     p.add_argument("--workers", type=int, default=2)
@@ -72,14 +78,14 @@ def part_notes(task: tuple) -> list[dict]:
     from pipelines.methods.render import render_score
     from synth.render import render_with_diagnostics
 
-    path, part, first, last, plays = task
+    path, part, first, last, plays, parameter = task
     p = render_score(str(path), method="rules", parts=part, start_measure=first,
                      end_measure=last, seed=0).parts[0]
     bowed = ~p.actions["pluck"].to_numpy(bool)
     notes: list[dict] = []
     for name, factor, seed in plays:
         actions = p.actions.copy()
-        actions.loc[bowed, "bow_force"] *= factor
+        actions.loc[bowed, parameter] *= factor
         audio, diag = render_with_diagnostics(actions, instrument=p.instrument, seed=seed)
         ev = evaluate(audio, actions, diagnostics=diag, instrument=p.instrument)
         judged = [n for n in ev["notes"] if n["string"] >= 0 and n["sustained_hops"] > 0]
@@ -114,7 +120,7 @@ def measure(args: argparse.Namespace) -> dict:
 
     plays = variants(args.factors, args.reseeds)
     music = MUSIC[:1] if args.quick else MUSIC
-    todo = [(path, part, first, last, plays) for rel, first, last in music
+    todo = [(path, part, first, last, plays, args.parameter) for rel, first, last in music
             if (path := _score_path(rel)) is not None for part in range(4)]
     if not todo:
         raise SystemExit("force_leverage: no score of the tuning set found")
@@ -139,7 +145,8 @@ def plot(report: dict, path: Path) -> Path:
         ax.semilogx(f, list(g["uniform_factor"].values()), "o-", label="uniform factor")
         ax.axhline(g["best_of_factors"], color="C1", label="per-note best factor")
         ax.axhline(g["best_of_reseeds"], color="C2", ls="--", label="per-note best seed, x1")
-        ax.set(title=f"{name} ({g['notes']} notes)", xlabel="force factor re the rules'")
+        ax.set(title=f"{name} ({g['notes']} notes)",
+               xlabel=f"{report['settings']['parameter']} factor re the rules'")
         ax.minorticks_off()
         ax.set_xticks(f, [f"{x:g}" for x in f])
     np.atleast_1d(axes)[0].set_ylabel("class-3 share of sustained hops")
@@ -153,7 +160,8 @@ def main(argv: list[str] | None = None) -> dict:
     args = parse_args(argv)
     t0 = time.perf_counter()
     report = {"benchmark": "force_leverage",
-              "settings": {"factors": args.factors, "reseeds": args.reseeds,
+              "settings": {"parameter": args.parameter, "factors": args.factors,
+                           "reseeds": args.reseeds,
                            "quick": args.quick, "rules_seed": 0}}
     report.update(measure(args))
     report["elapsed_s"] = round(time.perf_counter() - t0, 1)
