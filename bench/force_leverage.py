@@ -67,7 +67,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 
 def variants(factors: list[float], reseeds: int) -> list[tuple[str, float, int]]:
-    """``(name, force factor, synthesizer seed)`` of every render of a part."""
+    """``(name, factor of the scaled column, synthesizer seed)`` of every render of a part."""
     out = [(f"x{f:g}", float(f), 0) for f in factors]
     return out + [(f"seed{s}", 1.0, s) for s in range(1, reseeds + 1)]
 
