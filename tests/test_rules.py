@@ -271,7 +271,7 @@ def test_sul_ponticello_moves_towards_the_bridge(perf):
 
 
 def _accelerations(perf) -> tuple[np.ndarray, np.ndarray]:
-    """d|v|/dt (m/s^2; > 0 speeding up) between bowed rows of each string, and its time."""
+    """|dv/dt| (m/s^2) between bowed rows of each string, and the time of each."""
     out, when = [], []
     for _, rows in perf.actions.groupby("string"):
         t = rows["time"].to_numpy()
@@ -279,28 +279,23 @@ def _accelerations(perf) -> tuple[np.ndarray, np.ndarray]:
         f = rows["bow_force"].to_numpy()
         dt = np.diff(t)
         both = (f[1:] > 0) & (f[:-1] > 0) & (dt > 0)
-        out.append(np.diff(np.abs(v))[both] / dt[both])
+        out.append(np.abs(np.diff(v))[both] / dt[both])
         when.append(t[1:][both])
     return np.concatenate(out), np.concatenate(when)
 
 
 def test_max_bow_acceleration_is_respected(perf):
-    """Strokes long enough to reach their speed at 5 m/s^2 speed up no faster; none exceeds
-    the short strokes' limit; the bow slows down (to a bow change) at up to
-    ``max_deceleration``, faster than it speeds up, and no faster."""
+    """Strokes long enough to reach their speed at 5 m/s^2 keep to it; none exceeds the
+    short strokes' limit."""
     accel, when = _accelerations(perf)
-    bow = CFG["bow"]
-    assert accel.max() <= bow["short_stroke_acceleration"] + 1e-6
+    assert accel.max() <= CFG["bow"]["short_stroke_acceleration"] + 1e-6
     ev = perf.events
     long = ev[(ev["played_end"] - ev["t0"]) >= 0.5]
     inside = np.zeros(when.shape, bool)
     for t0, t1 in zip(long["t0"], long["played_end"], strict=True):
         inside |= (when > t0) & (when <= t1)
     assert inside.sum() > 50
-    assert accel[inside].max() <= bow["max_acceleration"] + 1e-6
-    slowing = -accel[inside]
-    assert bow["max_acceleration"] + 1.0 < slowing.max() <= bow["max_deceleration"] + 1e-6
-    assert -accel.min() <= max(bow["max_deceleration"], bow["short_stroke_acceleration"]) + 1e-6
+    assert accel[inside].max() <= CFG["bow"]["max_acceleration"] + 1e-6
 
 
 def test_short_detache_strokes_reach_their_speed(notes):
@@ -321,7 +316,6 @@ def test_short_detache_strokes_reach_their_speed(notes):
         assert np.abs(v[m.to_numpy()]).max() == pytest.approx(lane, rel=1e-6)
     accel, _ = _accelerations(perf)
     assert CFG["bow"]["max_acceleration"] < accel.max() <= CFG["bow"]["short_stroke_acceleration"]
-    assert -accel.min() <= CFG["bow"]["short_stroke_acceleration"] + 1e-6
 
 
 def test_bow_position_follows_velocity_and_stays_on_the_bow(perf):

@@ -1,7 +1,7 @@
 """Bow speed curves: how fast a stroke may speed up and slow down.
 
-- :func:`limit_acceleration`: lower a target speed curve until no segment speeds up faster
-  than the bow's acceleration limit or slows down faster than its deceleration limit.
+- :func:`limit_acceleration`: lower a target speed curve until no segment changes faster
+  than the bow's acceleration limit.
 - :func:`stroke_acceleration`: the limit a stroke is played with (a short stroke may
   accelerate faster, so that it reaches its speed within :data:`SHORT_STROKE_RAMP`).
 """
@@ -14,9 +14,8 @@ import numpy as np
 
 
 def limit_acceleration(t: np.ndarray, speed: np.ndarray,
-                       max_acceleration: float | np.ndarray,
-                       max_deceleration: float | np.ndarray | None = None) -> np.ndarray:
-    """Lower a speed curve until it rises and falls no faster than the limits.
+                       max_acceleration: float | np.ndarray) -> np.ndarray:
+    """Lower a speed curve until no segment changes faster than ``max_acceleration``.
 
     Parameters
     ----------
@@ -25,24 +24,21 @@ def limit_acceleration(t: np.ndarray, speed: np.ndarray,
     speed : np.ndarray [shape=(n,)], m/s
         Target speeds (>= 0); the result is pointwise <= the target.
     max_acceleration : float or np.ndarray [shape=(n - 1,)], m/s^2
-        Largest allowed rise of speed per second (one value, or one per segment).
-    max_deceleration : float or np.ndarray [shape=(n - 1,)], m/s^2, optional
-        Largest allowed fall of speed per second (default: ``max_acceleration``).
+        Largest allowed change of speed per second (one value, or one per segment).
 
     Returns
     -------
     np.ndarray [shape=(n,)], m/s
     """
     v = speed.astype(np.float64).tolist()
-    up = (np.diff(t) * max_acceleration).tolist()
-    down = up if max_deceleration is None else (np.diff(t) * max_deceleration).tolist()
+    dv = (np.diff(t) * max_acceleration).tolist()
     n = len(v)
     for k in range(1, n):
-        cap = v[k - 1] + up[k - 1]
+        cap = v[k - 1] + dv[k - 1]
         if v[k] > cap:
             v[k] = cap
     for k in range(n - 2, -1, -1):
-        cap = v[k + 1] + down[k]
+        cap = v[k + 1] + dv[k]
         if v[k] > cap:
             v[k] = cap
     return np.asarray(v)
@@ -85,23 +81,3 @@ def stroke_acceleration(t: np.ndarray, target: np.ndarray, bow: dict[str, Any]) 
         return base
     needed = float(np.max(target)) / (SHORT_STROKE_RAMP * length)
     return float(min(max(base, needed), max(base, bow["short_stroke_acceleration"])))
-
-
-def stroke_deceleration(acceleration: float | np.ndarray,
-                        bow: dict[str, Any]) -> float | np.ndarray:
-    """The fastest a stroke may slow down, m/s^2.
-
-    ``bow.max_deceleration``, or the stroke's own acceleration where that is higher. A
-    player stops the bow quickly at a bow change: on this string a slow stop leaves the
-    string in its chaotic low-speed regime longer (README, "From sheet music to bowing").
-
-    Examples
-    --------
-    >>> stroke_deceleration(5.0, {"max_deceleration": 20.0})
-    20.0
-    >>> stroke_deceleration(np.array([5.0, 30.0]), {"max_deceleration": 20.0}).tolist()
-    [20.0, 30.0]
-    """
-    return np.maximum(acceleration, float(bow["max_deceleration"])) \
-        if isinstance(acceleration, np.ndarray) else max(float(acceleration),
-                                                          float(bow["max_deceleration"]))

@@ -20,11 +20,7 @@ import pandas as pd
 from data_schemas.bow import BowBudget
 from data_schemas.instruments import finger_ratio, limits
 from pipelines.perform.bow_distribution import distribute
-from pipelines.perform.bow_speed import (
-    limit_acceleration,
-    stroke_acceleration,
-    stroke_deceleration,
-)
+from pipelines.perform.bow_speed import limit_acceleration, stroke_acceleration
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
@@ -43,9 +39,8 @@ class Stroke:
     ``t`` (s), ``speed`` (m/s, unsigned) and ``position`` (0 frog .. 1 tip) are arrays of the
     same shape; ``force_scale`` and ``beta_scale`` scale the force and the bow-bridge
     distance with the planned speed change (:func:`_play_stroke`);
-    ``acceleration`` (m/s^2) is the largest rise of speed the stroke allows
-    (:func:`stroke_acceleration`), per segment of ``t`` where a grace note starts it, and
-    ``deceleration`` the largest fall (:func:`stroke_deceleration`).
+    ``acceleration`` (m/s^2) is the largest change of speed the stroke allows
+    (:func:`stroke_acceleration`), per segment of ``t`` where a grace note starts it.
     """
 
     events: list[int]
@@ -55,7 +50,6 @@ class Stroke:
     position: np.ndarray
     travel: float
     acceleration: float | np.ndarray
-    deceleration: float | np.ndarray
     force_scale: float = 1.0
     speed_scale: float = 1.0
     beta_scale: float = 1.0
@@ -128,11 +122,10 @@ def plan(events: list[Event], config: dict[str, Any], *, bow_length: float,
         t = _stroke_grid(events, idx, dt)
         target = _target_speed(events, idx, t, config)
         accel = _start_acceleration(events[idx[0]], t, target, bow)
-        decel = stroke_deceleration(accel, bow)
-        speed = limit_acceleration(t, target, accel, decel)
+        speed = limit_acceleration(t, target, accel)
         travel = float(budget.travel(np.trapezoid(speed, t)))
         strokes.append(Stroke(idx, events[idx[0]].direction, t, speed, np.zeros_like(t),
-                              travel, accel, decel))
+                              travel, accel))
     squeezed = _place_strokes(strokes, events, config, budget)
     if squeezed and warnings is not None:
         warnings.append(f"{squeezed} strokes were slowed below "
@@ -234,7 +227,7 @@ def _play_stroke(s: Stroke, scale: float, position: float, budget: BowBudget) ->
     if s.travel * scale > avail:
         scale = avail / s.travel
     if scale != 1.0:
-        s.speed = limit_acceleration(s.t, s.speed * scale, s.acceleration, s.deceleration)
+        s.speed = limit_acceleration(s.t, s.speed * scale, s.acceleration)
         s.speed_scale = scale
         # A player who must slow the bow plays nearer the bridge, and a little heavier
         # for the bow speed (F_max ~ v / beta, F_min ~ v / beta^2): beta * sqrt(s) and

@@ -102,7 +102,6 @@ def _merge(base: dict[str, Any], over: dict[str, Any], source: str, prefix: str)
 UPPER_LIMITS: dict[str, dict[str, float]] = {
     "frames": {"interval": 0.1},
     "bow": {"max_acceleration": 100.0, "short_stroke_acceleration": 100.0,
-            "max_deceleration": 100.0,
             "min_speed_scale": 1.0, "max_speed_scale": 10.0, "retake_gap": 10.0,
             "region_span": 1.0},
     "articulations": {"*": 10.0},
@@ -180,8 +179,7 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
                 raise ParameterError(f"{source}: instruments.{name}.{key}={value!r} must be "
                                      f"> 0 and <= {upper}")
     _positive(config, "frames", "interval", source)
-    for key in ("max_acceleration", "short_stroke_acceleration", "max_deceleration",
-                "min_speed_scale",
+    for key in ("max_acceleration", "short_stroke_acceleration", "min_speed_scale",
                 "max_speed_scale", "retake_gap", "region_span"):
         _positive(config, "bow", key, source)
     margin = config["bow"]["margin"]
