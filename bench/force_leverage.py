@@ -34,8 +34,6 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -139,8 +137,9 @@ def plot(report: dict, path: Path) -> Path:
 
     groups = {**report["per_instrument"], "all": report["all"]}
     fig, axes = plt.subplots(1, len(groups), figsize=(4 * len(groups), 4), sharey=True,
-                             constrained_layout=True)
-    for ax, (name, g) in zip(np.atleast_1d(axes), groups.items(), strict=True):
+                             constrained_layout=True, squeeze=False)
+    axes = axes[0]
+    for ax, (name, g) in zip(axes, groups.items(), strict=True):
         f = [float(k) for k in g["uniform_factor"]]
         ax.semilogx(f, list(g["uniform_factor"].values()), "o-", label="uniform factor")
         ax.axhline(g["best_of_factors"], color="C1", label="per-note best factor")
@@ -149,8 +148,8 @@ def plot(report: dict, path: Path) -> Path:
                xlabel=f"{report['settings']['parameter']} factor re the rules'")
         ax.minorticks_off()
         ax.set_xticks(f, [f"{x:g}" for x in f])
-    np.atleast_1d(axes)[0].set_ylabel("class-3 share of sustained hops")
-    np.atleast_1d(axes)[0].legend(fontsize=8)
+    axes[0].set_ylabel("class-3 share of sustained hops")
+    axes[0].legend(fontsize=8)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
