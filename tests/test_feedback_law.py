@@ -143,3 +143,49 @@ def test_no_law_right_after_a_finger_change():
         ctl.step(np.array([2.0 * F_OPT]), 0.3, 0.3)
         forces.append(ctl.force)
     assert forces[:8] == [2.0 * F_OPT] * 8 and forces[8] < 2.0 * F_OPT
+
+
+class TooLittlePredictor:
+    """Always surely 'too little' (class 2), whatever it hears."""
+
+    def probabilities(self, features):
+        return np.array([0.0, 1.0, 0.0, 0.0, 0.0]), 2
+
+
+class TooLittleModel(PlantModel):
+    def fast(self):
+        return TooLittlePredictor()
+
+
+def _gated_forces(aperiodicity: float, gate: float, hops: int = 20) -> np.ndarray:
+    from synth.listening.feature_spec import COL_APERIODICITY, FEATURE_NAMES
+
+    settings = ControllerSettings(jitter=0.0, grace_hops=0, range_margin=0.0,
+                                  periodic_gate=gate)
+    ctl = ForceController(TooLittleModel(), np.random.default_rng(0), settings)
+    ctl.start_note(0.0, 1.0)
+    window = np.zeros(len(FEATURE_NAMES))
+    window[COL_APERIODICITY] = aperiodicity
+    forces = []
+    for _ in range(hops):
+        ctl.step(window, 0.3, 0.3)
+        forces.append(ctl.force)
+    return np.array(forces)
+
+
+@pytest.mark.parametrize("aperiodicity", [0.0, 0.01, 0.099])
+def test_periodic_gate_leaves_a_periodic_sound_alone(aperiodicity):
+    # the classifier insists on "too little", but the window is periodic: force held at 1 N
+    np.testing.assert_array_equal(_gated_forces(aperiodicity, 0.1), np.ones(20))
+
+
+@pytest.mark.parametrize("aperiodicity", [0.1, 0.3, 0.9])
+def test_periodic_gate_lets_the_law_act_on_an_aperiodic_sound(aperiodicity):
+    step = ControllerSettings().step
+    # from the first hop on, every hop raises the force by the law's full step
+    np.testing.assert_allclose(_gated_forces(aperiodicity, 0.1),
+                               step ** np.arange(1, 21), rtol=1e-12)
+
+
+def test_periodic_gate_off_by_default():
+    np.testing.assert_allclose(_gated_forces(0.0, 0.0)[-1], ControllerSettings().step ** 20)

@@ -28,7 +28,9 @@ from data_schemas.instruments import finger_ratio
 from synth.controls import Block, BowControl
 from synth.engines import Engine
 from synth.listening.classifier import PairModel
+from synth.listening.feature_spec import COL_APERIODICITY
 from synth.listening.features import HOP, StreamingFeatures, yin_window_for
+from synth.listening.law import DIRECTION, correction  # noqa: F401 (re-exported)
 
 MAX_FORCE = 50.0  # N, the actions table's limit
 
@@ -71,6 +73,9 @@ class ControllerSettings:
     practised_start : bool
         Correcting a planned force: each stroke starts at its pair's practised factor
         (:attr:`PairModel.start_factor`, learned by ``arco practice``) instead of 1.
+    periodic_gate : float
+        No correction while the window's YIN aperiodicity is below this: a periodic sound
+        is left alone whatever the classifier says (0: off).
     """
 
     average: int = 3
@@ -84,6 +89,7 @@ class ControllerSettings:
     trim: float = 0.0
     sure: float = 0.0
     practised_start: bool = False
+    periodic_gate: float = 0.0
 
 
 class ForceController:
@@ -172,7 +178,10 @@ class ForceController:
                 self._recent.append(probabilities)
         decelerating = speed < self._last_speed - 1e-9
         self._last_speed = speed
-        if c and settled and speed > s.min_speed_share * target_speed and not decelerating:
+        periodic = (s.periodic_gate > 0 and features is not None
+                    and features[COL_APERIODICITY] < s.periodic_gate)
+        if c and settled and speed > s.min_speed_share * target_speed and not decelerating \
+                and not periodic:
             self.force *= correction(sum(self._recent) / len(self._recent), self.K,
                                      s.good_share, s.sure)
         if s.jitter:
@@ -181,32 +190,6 @@ class ForceController:
             self.force *= 1.0 + s.jitter * noise
         self.force = min(max(self.force, self.bounds[0]), self.bounds[1])
         return c
-
-
-#: 3 - c of the classes 1..5: the direction the force should move (class 2: up).
-DIRECTION = np.array([2.0, 1.0, 0.0, -1.0, -2.0])
-
-
-def correction(probabilities: np.ndarray, step: float, good_share: float,
-               sure: float = 0.0) -> float:
-    """Force factor of one hop from averaged class probabilities.
-
-    ``step ** E[3 - c]`` under ``probabilities`` (of classes 1..5); 1 while class 3 holds at
-    least ``good_share``, or while neither side (classes 1-2, "too little"; classes 4-5,
-    "too much") holds at least ``sure``.
-
-    Examples
-    --------
-    >>> correction(np.array([0.0, 1.0, 0.0, 0.0, 0.0]), 1.2, 0.5)  # surely too little
-    1.2
-    >>> correction(np.array([0.0, 0.3, 0.6, 0.1, 0.0]), 1.2, 0.5)  # good enough
-    1.0
-    """
-    if probabilities[2] >= good_share:
-        return 1.0
-    if max(probabilities[0] + probabilities[1], probabilities[3] + probabilities[4]) < sure:
-        return 1.0
-    return float(step ** float(probabilities @ DIRECTION))
 
 
 @dataclass

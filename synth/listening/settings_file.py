@@ -35,6 +35,7 @@ RANGES: dict[str, dict[str, tuple[type, float, float]]] = {
         "trim": (float, 0.0, 100.0),
         "sure": (float, 0.0, 1.0),
         "practised_start": (bool, 0.0, 1.0),
+        "periodic_gate": (float, 0.0, 1.0),
     },
     "teacher": {
         "silent_db": (float, -200.0, 0.0),
