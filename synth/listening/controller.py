@@ -30,7 +30,7 @@ from synth.engines import Engine
 from synth.listening.classifier import PairModel
 from synth.listening.feature_spec import COL_APERIODICITY
 from synth.listening.features import HOP, StreamingFeatures, yin_window_for
-from synth.listening.law import DIRECTION, correction  # noqa: F401 (re-exported)
+from synth.listening.law import correction
 
 MAX_FORCE = 50.0  # N, the actions table's limit
 
