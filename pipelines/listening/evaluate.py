@@ -28,6 +28,7 @@ import pandas as pd
 
 from data_schemas.errors import ParameterError
 from pipelines.listening import note_measures as nm
+from pipelines.listening.settled import cancel_period
 from pipelines.listening.spans import NoteSpan, find_notes, spans_from_actions, spans_from_times
 from synth.listening.features import HOP
 from synth.listening.teacher import (
@@ -43,6 +44,9 @@ MF_RATIO = 0.33 / 0.10  # velocity / beta of the mezzo-forte lane
 #: Notes at performed times from an alignment are coarse (about +-40 ms): their sustained
 #: hops keep this much further from the note's ends, s.
 ALIGNMENT_MARGIN = 0.04
+#: The teacher's windows reach this many hops past a note's last hop (hop_statistics: a
+#: centred window of 8 hops plus 3 hops of lag).
+TEACHER_TAIL_HOPS = 4
 
 
 #: Audio whose peak is below this (full scale = 1) is silent: nothing to evaluate.
@@ -228,11 +232,33 @@ def _teacher_stats(span: NoteSpan, hops: np.ndarray, ctx: _Context) -> list[Regi
     a, b = int(hops[0]), int(hops[-1]) + 1
     f0 = span.f0_at((hops + 0.5) * HOP / ctx.sample_rate)
     seg = ctx.audio[a * HOP:]
+    heard = _without_ringing(span, a, b, ctx)
     if ctx.slips is not None and span.string in ctx.per_hop:
         onsets, period = ctx.per_hop[span.string]
-        return hop_statistics(onsets[a:b], period[a:b], seg, f0=f0,
+        return hop_statistics(onsets[a:b], period[a:b], seg, f0=f0, signal=heard,
                               sample_rate=ctx.sample_rate, reference_rms=ctx.ref)
-    return audio_statistics(seg, f0=f0, sample_rate=ctx.sample_rate, reference_rms=ctx.ref)
+    return audio_statistics(seg, f0=f0, sample_rate=ctx.sample_rate, reference_rms=ctx.ref,
+                            signal=heard)
+
+
+def _without_ringing(span: NoteSpan, first_hop: int, end_hop: int, ctx: _Context) -> np.ndarray:
+    """The audio from ``first_hop`` on with the notes ringing on other strings cancelled.
+
+    The teacher's periodicity tests read it (as the waveform path does,
+    :func:`~pipelines.listening.note_measures.from_waveform`): a note still ringing on
+    another string is the violin's own sound, not a fault of the bowed note, but heard
+    through the autocorrelation it reads as anomalous low frequencies or noise.
+    """
+    start = first_hop * HOP
+    stop = min((end_hop + TEACHER_TAIL_HOPS) * HOP, ctx.audio.size)
+    periods = nm.ringing_periods(span, ctx.all_spans, ctx.sample_rate)
+    if not periods:
+        return ctx.audio[start:stop]
+    lo = max(start - int(np.ceil(sum(periods))) - len(periods), 0)
+    x = ctx.audio[lo:stop]
+    for p in periods:
+        x = cancel_period(x, p)
+    return x[start - lo:]
 
 
 def _bowing(span: NoteSpan, t: np.ndarray, actions: pd.DataFrame | None):

@@ -221,7 +221,8 @@ def clip_statistics(onset_times: np.ndarray, signal: np.ndarray, audio: np.ndarr
 
 def hop_statistics(slip_onsets: np.ndarray, sounding_period: np.ndarray, audio: np.ndarray, *,
                    f0: np.ndarray, sample_rate: int, reference_rms: float,
-                   window_hops: int = 8) -> list[RegimeStatistics]:
+                   window_hops: int = 8,
+                   signal: np.ndarray | None = None) -> list[RegimeStatistics]:
     """Measure every hop from a diagnostics table's columns, over a centred window of hops.
 
     Parameters
@@ -238,12 +239,17 @@ def hop_statistics(slip_onsets: np.ndarray, sounding_period: np.ndarray, audio: 
     reference_rms : float
     window_hops : int
         Hops per judged window (centred on the hop).
+    signal : np.ndarray [shape=(>= n * HOP,)], optional
+        What the periodicity tests read, aligned with ``audio`` (default ``audio``); the
+        level and clipping are always the audio's. The evaluation passes the audio with
+        other strings' ringing notes cancelled.
 
     Returns
     -------
     list of RegimeStatistics [length n]
     """
     n = slip_onsets.size
+    signal = audio if signal is None else signal
     onsets = np.asarray(slip_onsets, np.float64)
     per = np.asarray(sounding_period, np.float64)
     good = np.abs(per * f0 - 1.0) < PERIOD_TOLERANCE
@@ -259,7 +265,8 @@ def hop_statistics(slip_onsets: np.ndarray, sounding_period: np.ndarray, audio: 
         heard = hsum[b] - hsum[a]
         share = (gsum[b] - gsum[a]) / heard if heard else 0.0
         seg = audio[a * HOP:b * HOP + 3 * HOP]
-        acf_t0, acf_long, cents = periodicity(seg, sample_rate / f0[k])
+        acf_t0, acf_long, cents = periodicity(signal[a * HOP:b * HOP + 3 * HOP],
+                                              sample_rate / f0[k])
         finite = bool(np.all(np.isfinite(seg))) and float(np.max(np.abs(seg), initial=0)) < 1.0
         out.append(RegimeStatistics(spp, share, acf_t0, acf_long, cents,
                                     level_db(seg, reference_rms), finite))
@@ -267,19 +274,23 @@ def hop_statistics(slip_onsets: np.ndarray, sounding_period: np.ndarray, audio: 
 
 
 def audio_statistics(audio: np.ndarray, *, f0: np.ndarray, sample_rate: int,
-                     reference_rms: float, window_hops: int = 8) -> list[RegimeStatistics]:
+                     reference_rms: float, window_hops: int = 8,
+                     signal: np.ndarray | None = None) -> list[RegimeStatistics]:
     """Estimate per-hop statistics from audio alone (no slip onsets: a real recording).
 
     Helmholtz share is estimated as 1 when the waveform repeats at T0 (autocorrelation
-    >= 0.9) and 0 otherwise; slips per period are unknown (NaN).
+    >= 0.9) and 0 otherwise; slips per period are unknown (NaN). ``signal`` is what the
+    periodicity tests read, as in :func:`hop_statistics`.
     """
     n = f0.size
+    signal = audio if signal is None else signal
     half = window_hops // 2
     out = []
     for k in range(n):
         a, b = max(0, k - half), min(n, k + half)
         seg = audio[a * HOP:b * HOP + 3 * HOP]
-        acf_t0, acf_long, cents = periodicity(seg, sample_rate / f0[k])
+        acf_t0, acf_long, cents = periodicity(signal[a * HOP:b * HOP + 3 * HOP],
+                                              sample_rate / f0[k])
         finite = bool(np.all(np.isfinite(seg))) and float(np.max(np.abs(seg), initial=0)) < 1.0
         out.append(RegimeStatistics(np.nan, 1.0 if acf_t0 >= 0.9 else 0.0, acf_t0, acf_long,
                                     cents, level_db(seg, reference_rms), finite))
