@@ -254,3 +254,31 @@ def test_bow_joins_tell_a_new_stroke_from_a_stop_and_from_legato():
     # the third note follows a legato note (not stopped); the fourth follows a stopped one
     assert table["bow_join"].tolist() == ["", "bow change", "legato", "bow restart", "legato",
                                           "bow change", "", ""]
+
+
+def test_per_instrument_tables_pool_each_instruments_notes(tmp_path):
+    from pipelines.reports.html import write_report
+    from pipelines.reports.summary import summarise
+
+    def job(method, seed, violin_share, cello_share):
+        j = _job(method, seed, "x", 1.0)
+        j["notes"] = ([{**n, "helmholtz_share": violin_share, "instrument": "violin"}
+                       for n in j["notes"][:2]]
+                      + [{**n, "helmholtz_share": cello_share, "instrument": "cello"}
+                         for n in j["notes"][2:]])
+        return j
+
+    done = [job("a", s, 1.0, 0.5) for s in (0, 1)] + [job("b", s, 0.4, 0.9) for s in (0, 1)]
+    r = summarise(done, excerpts=[{"name": "x"}], methods=["a", "b"], seeds=[0, 1])
+    assert list(r["instruments"]) == ["violin", "cello"]
+    violin, cello = r["instruments"]["violin"], r["instruments"]["cello"]
+    assert violin["summary"]["a"]["helmholtz_share"]["mean"] == pytest.approx(1.0)
+    assert violin["summary"]["b"]["helmholtz_share"]["mean"] == pytest.approx(0.4)
+    assert cello["summary"]["b"]["helmholtz_share"]["mean"] == pytest.approx(0.9)
+    assert violin["winners"]["helmholtz_share"] == "a"
+    assert cello["winners"]["helmholtz_share"] == "b"
+    # pooled over both instruments (equal hops): 0.75 against 0.65, intervals apart
+    assert r["summary"]["a"]["helmholtz_share"]["mean"] == pytest.approx(0.75)
+    write_report(r, tmp_path)
+    page = (tmp_path / "index.html").read_text()
+    assert "<h2>violin parts</h2>" in page and "<h2>cello parts</h2>" in page

@@ -10,6 +10,8 @@ into the content of ``results.json``:
   ``winners``: figure -> method or null (no separation), ``contenders``: figure -> the
   methods not separated from the best;
 - ``excerpts``: the same per excerpt;
+- ``instruments``: the same per instrument (its parts' notes pooled over the excerpts),
+  in order of first appearance;
 - ``timing``: method -> mean render seconds and real-time factor (reported, not scored);
 - ``runs``: method -> excerpt -> seed -> the yardstick's figures (or ``error``);
 - ``failed``: method -> its first error, for a method that failed on every excerpt (it is
@@ -38,14 +40,16 @@ INTERVAL_TEXT = (f"{iv.LEVEL:.0%} percentile interval of a two-stage bootstrap "
 
 
 def _intervals(done: list[dict], methods: list[str], seeds: list[int],
-               excerpt: str | None = None) -> dict[str, dict[str, iv.Interval]]:
-    """Intervals (figure -> method) over one excerpt's notes (or all of them)."""
+               excerpt: str | None = None,
+               instrument: str | None = None) -> dict[str, dict[str, iv.Interval]]:
+    """Intervals (figure -> method) over one excerpt's or instrument's notes (or all)."""
     out: dict[str, dict[str, iv.Interval]] = {f: {} for f in FIGURES}
     for m in methods:
         per_seed = []
         for s in seeds:
             notes = [n for r in done if r["method"] == m and r["seed"] == s
-                     and (excerpt is None or r["excerpt"] == excerpt) for n in r["notes"]]
+                     and (excerpt is None or r["excerpt"] == excerpt) for n in r["notes"]
+                     if instrument is None or n.get("instrument") == instrument]
             per_seed.append(iv.note_arrays(notes))
         if not any(a["sustained_hops"].size for a in per_seed):
             continue
@@ -73,6 +77,17 @@ def _timing(done: list[dict], methods: list[str]) -> dict[str, dict[str, float]]
             out[m] = {k: float(np.mean([f[k] for f in runs]))
                       for k in ("render_seconds", "real_time_factor", "audio_seconds")}
     return out
+
+
+def _runs_and_media(done: list[dict], methods: list[str]) -> tuple[dict, dict]:
+    """The runs (method -> excerpt -> seed -> figures) and the first seed's media."""
+    runs: dict[str, dict[str, dict[str, Any]]] = {m: {} for m in methods}
+    media: dict[str, dict[str, Any]] = {m: {} for m in methods}
+    for r in done:
+        runs[r["method"]].setdefault(r["excerpt"], {})[str(r["seed"])] = r["figures"]
+        if r["media"]:
+            media[r["method"]][r["excerpt"]] = r["media"]
+    return runs, media
 
 
 def _failures(done: list[dict], methods: list[str], names: list[str]):
@@ -138,12 +153,11 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
         played = [m for m in ok if (m, e) not in errors]
         per_excerpt[e] = _table(_intervals([r for r in done if r["method"] in played],
                                            played, seeds, e))
-    runs: dict[str, dict[str, dict[str, Any]]] = {m: {} for m in methods}
-    media: dict[str, dict[str, Any]] = {m: {} for m in methods}
-    for r in done:
-        runs[r["method"]].setdefault(r["excerpt"], {})[str(r["seed"])] = r["figures"]
-        if r["media"]:
-            media[r["method"]][r["excerpt"]] = r["media"]
+    instruments = dict.fromkeys(n["instrument"] for r in good for n in r["notes"]
+                                if n.get("instrument"))
+    per_instrument = {i: _table(_intervals(good, ok, seeds, instrument=i))
+                      for i in instruments}
+    runs, media = _runs_and_media(done, methods)
     verdict = verdict_sentence(pooled, n_excerpts=len(names) - len(left_out),
                                n_seeds=len(seeds))
     notes = [f"{e} left out, {msg}" for e, msg in left_out.items()]
@@ -157,6 +171,7 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
         "why_text": [why_sentence(m, w) for m, w in whys.items()],
         **_table(pooled),
         "excerpts": per_excerpt,
+        "instruments": per_instrument,
         "timing": _timing(done, methods),
         "runs": runs,
         "failed": failed,
