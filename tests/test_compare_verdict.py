@@ -155,7 +155,22 @@ def test_verdict_names_a_winner_and_the_figures_that_do_not_separate():
                      "sampling": Interval(0.72, 0.65, 0.8)})
     assert verdict_sentence(s, n_excerpts=4, n_seeds=5) == (
         "On 4 excerpts x 5 seeds, rules beats feedback and sampling on Helmholtz share and "
-        "attack p90; rules and sampling do not separate on class-3 share.")
+        "attack p90; rules and sampling beat feedback on class-3 share.")
+
+
+def test_a_tied_group_beats_the_rest_only_when_each_member_separates_from_each():
+    low = Interval(0.91, 0.88, 0.94)
+    group = _summary(hs={"rules": low, "feedback": low,
+                         "sampling": Interval(0.96, 0.95, 0.98),
+                         "open": Interval(0.97, 0.96, 0.98)})
+    assert verdict_sentence(group, n_excerpts=2, n_seeds=5) == (
+        "On 2 excerpts x 5 seeds, sampling and open beat rules and feedback on Helmholtz "
+        "share.")
+    # feedback ties with the best and with rules; rules is apart from the best only
+    chain = _summary(at={"rules": Interval(124, 110, 141), "feedback": Interval(118, 100, 140),
+                         "sampling": Interval(98, 89, 120), "open": Interval(95, 86, 109)})
+    assert verdict_sentence(chain, n_excerpts=2, n_seeds=5) == (
+        "On 2 excerpts x 5 seeds, feedback, sampling and open do not separate on attack p90.")
 
 
 def test_verdict_without_any_separation_and_with_ties():
@@ -277,6 +292,8 @@ def test_per_instrument_tables_pool_each_instruments_notes(tmp_path):
     assert cello["summary"]["b"]["helmholtz_share"]["mean"] == pytest.approx(0.9)
     assert violin["winners"]["helmholtz_share"] == "a"
     assert cello["winners"]["helmholtz_share"] == "b"
+    assert cello["verdict"].startswith("On the cello parts of 1 excerpt x 2 seeds, b beats a "
+                                       "on Helmholtz share")
     # pooled over both instruments (equal hops): 0.75 against 0.65, intervals apart
     assert r["summary"]["a"]["helmholtz_share"]["mean"] == pytest.approx(0.75)
     write_report(r, tmp_path)

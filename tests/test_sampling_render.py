@@ -187,9 +187,12 @@ def test_arco_compare_writes_the_report(tiny_db, tmp_path, capsys):
     assert main(["compare", score, "--methods", "rules,sampling-open", "--db",
                  str(tiny_db / "db"), "-o", str(out), "--start-measure", "1",
                  "--end-measure", "2", "--seeds", "2", "--quiet"]) == 0
-    verdict = capsys.readouterr().out.strip()
+    verdict, *per_instrument = capsys.readouterr().out.strip().splitlines()
     results = json.loads((out / "results.json").read_text())
     assert next(iter(results)) == "verdict" and results["verdict"] == verdict
+    assert list(results["instruments"]) == ["violin"]  # the score's first part
+    assert per_instrument == [results["instruments"]["violin"]["verdict"]]
+    assert per_instrument[0].startswith("On the violin parts of 1 excerpt x 2 seeds, ")
     assert verdict.startswith("On 1 excerpt x 2 seeds, ")
     assert set(results["runs"]) == {"rules", "sampling-open"}
     for seed in ("0", "1"):

@@ -173,7 +173,7 @@ def _html(results: Mapping[str, Any], methods: Mapping[str, str], has_plot: bool
     if has_plot:
         out.append("<img src='intervals.png' alt='figures with 95 % intervals'>")
     for name, table in results.get("instruments", {}).items():
-        out.append(f"<h2>{esc(name)} parts</h2>")
+        out.append(f"<h2>{esc(name)} parts</h2><p>{esc(table['verdict'])}</p>")
         out += _figure_table(table, None)
     out += ["<h2>Worst notes</h2>", *_worst(results["why"])]
     for name, table in results["excerpts"].items():

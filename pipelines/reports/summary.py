@@ -11,7 +11,7 @@ into the content of ``results.json``:
   methods not separated from the best;
 - ``excerpts``: the same per excerpt;
 - ``instruments``: the same per instrument (its parts' notes pooled over the excerpts),
-  in order of first appearance;
+  in order of first appearance, each with its own verdict;
 - ``timing``: method -> mean render seconds and real-time factor (reported, not scored);
 - ``runs``: method -> excerpt -> seed -> the yardstick's figures (or ``error``);
 - ``failed``: method -> its first error, for a method that failed on every excerpt (it is
@@ -76,6 +76,18 @@ def _timing(done: list[dict], methods: list[str]) -> dict[str, dict[str, float]]
         if runs:
             out[m] = {k: float(np.mean([f[k] for f in runs]))
                       for k in ("render_seconds", "real_time_factor", "audio_seconds")}
+    return out
+
+
+def _per_instrument(good: list[dict], methods: list[str], seeds: list[int],
+                    n_excerpts: int) -> dict[str, dict[str, Any]]:
+    """Per instrument, in order of first appearance: its verdict and its table."""
+    out = {}
+    for i in dict.fromkeys(n["instrument"] for r in good for n in r["notes"]
+                           if n.get("instrument")):
+        ivs = _intervals(good, methods, seeds, instrument=i)
+        out[i] = {"verdict": verdict_sentence(ivs, n_excerpts=n_excerpts, n_seeds=len(seeds),
+                                              instrument=i), **_table(ivs)}
     return out
 
 
@@ -153,10 +165,7 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
         played = [m for m in ok if (m, e) not in errors]
         per_excerpt[e] = _table(_intervals([r for r in done if r["method"] in played],
                                            played, seeds, e))
-    instruments = dict.fromkeys(n["instrument"] for r in good for n in r["notes"]
-                                if n.get("instrument"))
-    per_instrument = {i: _table(_intervals(good, ok, seeds, instrument=i))
-                      for i in instruments}
+    per_instrument = _per_instrument(good, ok, seeds, len(names) - len(left_out))
     runs, media = _runs_and_media(done, methods)
     verdict = verdict_sentence(pooled, n_excerpts=len(names) - len(left_out),
                                n_seeds=len(seeds))

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from pipelines.reports.figures import FIGURES, LABELS
-from pipelines.reports.intervals import Interval, contenders, winner
+from pipelines.reports.intervals import Interval, better, contenders, winner
 
 #: A note's attack (ms to stable Helmholtz motion) slower than this fails (the issue's target).
 ATTACK_MS = 50.0
@@ -57,8 +57,15 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
                      n_seeds: int, figures: Mapping[str, bool | None] = FIGURES,
                      headline: Sequence[str] = ("helmholtz_share", "attack_ms_p90",
                                                 "sustained_class3_share",
-                                                "sustained_class5_share")) -> str:
+                                                "sustained_class5_share"),
+                     instrument: str | None = None) -> str:
     """One sentence: who beats whom on the headline figures, and what does not separate.
+
+    A method beats the others on a figure when its interval separates from every other
+    method's; a group of methods that do not separate from one another beats the rest when
+    each of them separates from each of the rest ("sampling and sampling-open beat rules
+    and feedback"); otherwise the methods not separated from the best are named as not
+    separating.
 
     Parameters
     ----------
@@ -69,6 +76,8 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
         Figure -> larger is better (None: closer to zero).
     headline : sequence of str
         The figures the sentence speaks of (in this order).
+    instrument : str, optional
+        The summary holds only this instrument's parts ("On the cello parts of ...").
 
     Examples
     --------
@@ -80,27 +89,34 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
     >>> print(textwrap.fill(verdict_sentence(s, n_excerpts=4, n_seeds=5), 80))
     On 4 excerpts x 5 seeds, rules beats feedback on Helmholtz share; rules and
     feedback do not separate on attack p90.
+    >>> s["helmholtz_share"]["sampling"] = Interval(0.92, 0.88, 0.97)
+    >>> print(textwrap.fill(verdict_sentence(s, n_excerpts=4, n_seeds=5), 80))
+    On 4 excerpts x 5 seeds, rules and sampling beat feedback on Helmholtz share;
+    rules and feedback do not separate on attack p90.
     """
-    wins: dict[tuple[str, tuple[str, ...]], list[str]] = {}
+    wins: dict[tuple[tuple[str, ...], tuple[str, ...]], list[str]] = {}
     ties: dict[tuple[str, ...], list[str]] = {}
     for fig in headline:
         per = {m: iv for m, iv in summary.get(fig, {}).items() if np.isfinite(iv.mean)}
         if len(per) < 2:
             continue
         w = winner(per, figures[fig])
-        if w is not None:
-            key = (w, tuple(m for m in per if m != w))
-            wins.setdefault(key, []).append(LABELS[fig])
+        top = [w] if w is not None else contenders(per, figures[fig])
+        rest = tuple(m for m in per if m not in top)
+        if rest and all(better(per[a], per[b], figures[fig]) for a in top for b in rest):
+            wins.setdefault((tuple(m for m in per if m in top), rest), []).append(LABELS[fig])
         else:
-            who = set(contenders(per, figures[fig]))
-            ties.setdefault(tuple(m for m in per if m in who), []).append(LABELS[fig])
+            ties.setdefault(tuple(m for m in per if m in top), []).append(LABELS[fig])
     clauses = []
-    for (w, others), figs in wins.items():
-        clauses.append(f"{w} beats {_join(others)} on {_join(figs)}")
+    for (top, others), figs in wins.items():
+        verb = "beats" if len(top) == 1 else "beat"
+        clauses.append(f"{_join(top)} {verb} {_join(others)} on {_join(figs)}")
     for who, figs in ties.items():
         clauses.append(f"{_join(who)} do not separate on {_join(figs)}")
     plural = "s" if n_seeds != 1 else ""
     head = f"On {n_excerpts} excerpt{'s' if n_excerpts != 1 else ''} x {n_seeds} seed{plural}"
+    if instrument:
+        head = f"On the {instrument} parts of {head[3:]}"
     if not clauses:
         return head + ", no figure could be compared (fewer than two methods measured)."
     return head + ", " + "; ".join(clauses) + "."

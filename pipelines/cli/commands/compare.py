@@ -138,5 +138,7 @@ def run(args: argparse.Namespace) -> int:
                           search_config=args.search_config, workers=args.workers,
                           progress=not args.quiet, title=title, log=say)
     print(results["verdict"])
+    for table in results.get("instruments", {}).values():
+        print(table["verdict"])
     say(f"wrote {args.output}/index.html, results.json, results.csv")
     return 0

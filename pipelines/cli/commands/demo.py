@@ -261,7 +261,8 @@ def heldout_story(out: Path, workers: int) -> list[str]:
             f"{measures} measures each, all four parts, {DEMO_SEEDS} seeds "
             f"({time.perf_counter() - start:.0f} s): `heldout/index.html`.{note} The full "
             "protocol: `arco compare --heldout --db DB --models DIR -o DIR`.", "",
-            f"**{results['verdict']}**", "", *interval_table(results), ""]
+            f"**{results['verdict']}**", "", *interval_table(results), "",
+            *(f"- {t['verdict']}" for t in results.get("instruments", {}).values()), ""]
 
 
 def _pitch_rows(name: str, audio: np.ndarray, events) -> list[str]:
