@@ -236,7 +236,9 @@ def _teacher_stats(span: NoteSpan, hops: np.ndarray, ctx: _Context) -> list[Regi
     if ctx.slips is not None and span.string in ctx.per_hop:
         onsets, period = ctx.per_hop[span.string]
         return hop_statistics(onsets[a:b], period[a:b], seg, f0=f0, signal=heard,
-                              sample_rate=ctx.sample_rate, reference_rms=ctx.ref)
+                              sample_rate=ctx.sample_rate, reference_rms=ctx.ref,
+                              onset_times=ctx.slips.onsets.get(span.string),
+                              start_time=a * HOP / ctx.sample_rate)
     return audio_statistics(seg, f0=f0, sample_rate=ctx.sample_rate, reference_rms=ctx.ref,
                             signal=heard)
 

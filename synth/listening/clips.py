@@ -152,7 +152,8 @@ def auto_label(clip: Clip, *, thresholds: TeacherThresholds | None = None) -> in
     stats = clip_statistics(clip.onset_times, clip.bridge_force, audio,
                             f0=spec.nominal_frequency(), duration=n / clip.sample_rate,
                             sample_rate=clip.sample_rate,
-                            reference_rms=reference_rms(spec.instrument, clip.sample_rate))
+                            reference_rms=reference_rms(spec.instrument, clip.sample_rate),
+                            start=clip.start_time)
     return judge(stats, force_ratio=_force_ratio(spec), thresholds=thresholds)
 
 
@@ -206,6 +207,7 @@ def auto_hop_labels(clip: Clip, *, window_hops: int = 8,
         b = a + width
         onsets = clip.onset_times[(t >= a / sr) & (t < b / sr)]
         stats = clip_statistics(onsets, clip.bridge_force[a:b], audio[a:b], f0=f0,
-                                duration=(b - a) / sr, sample_rate=sr, reference_rms=ref_rms)
+                                duration=(b - a) / sr, sample_rate=sr, reference_rms=ref_rms,
+                                start=clip.start_time + a / sr)
         out.append(judge(stats, force_ratio=ratio, thresholds=thresholds))
     return np.asarray(out, np.int64)

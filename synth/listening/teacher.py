@@ -184,9 +184,44 @@ def level_db(audio: np.ndarray, reference_rms: float) -> float:
     return 20.0 * np.log10(max(rms, 1e-12) / max(reference_rms, 1e-12))
 
 
+def slips_per_period(onset_times: np.ndarray, start: float, end: float, f0: float) -> float:
+    """Slips per nominal period over the window ``start .. end`` (s), free of its rounding.
+
+    A window of D f0 periods holds floor(D f0) or ceil(D f0) slips of Helmholtz motion, so
+    the plain count per period is off by up to 1 / (D f0): 0.88 or 1.17 for a cello D2 in
+    the teacher's 46 ms window (3.4 periods), outside the +-0.1 that Helmholtz motion is
+    allowed. When the slips reach both ends of the window (the first within a period of
+    its start, the last within a period of its end), the rate is taken between the first
+    and the last slip, (k - 1) / ((t_last - t_first) f0); otherwise (slips stop or start
+    inside it, or fewer than two) it is k / ((end - start) f0).
+
+    Parameters
+    ----------
+    onset_times : np.ndarray [shape=(k,)], s
+        Slip onsets (any that fall outside the window are ignored).
+    start, end : float, s
+        The window.
+    f0 : float, Hz
+        Nominal frequency.
+
+    Examples
+    --------
+    >>> t = np.arange(0.0, 1.0, 1 / 73.4)  # Helmholtz motion at D2
+    >>> inside = t[(t >= 0.2) & (t < 0.2464)]
+    >>> round(inside.size / (0.0464 * 73.4), 2), round(slips_per_period(t, 0.2, 0.2464, 73.4), 2)
+    (1.17, 1.0)
+    """
+    t = np.asarray(onset_times, np.float64)
+    t = t[(t >= start) & (t < end)]
+    period = (1.0 + PERIOD_TOLERANCE) / f0
+    if t.size >= 2 and t[0] - start <= period and end - t[-1] <= period:
+        return float((t.size - 1) / ((t[-1] - t[0]) * f0))
+    return float(t.size / ((end - start) * f0))
+
+
 def clip_statistics(onset_times: np.ndarray, signal: np.ndarray, audio: np.ndarray, *,
                     f0: float, duration: float, sample_rate: int,
-                    reference_rms: float) -> RegimeStatistics:
+                    reference_rms: float, start: float | None = None) -> RegimeStatistics:
     """Measure a recorded clip from its slip onsets and signals.
 
     Parameters
@@ -204,6 +239,9 @@ def clip_statistics(onset_times: np.ndarray, signal: np.ndarray, audio: np.ndarr
     sample_rate : int, Hz
     reference_rms : float
         RMS of the mezzo-forte reference.
+    start : float, s, optional
+        The clip's start on the onsets' clock: slips per period are then measured free of
+        the window's rounding (:func:`slips_per_period`); without it, counted.
 
     Returns
     -------
@@ -215,14 +253,16 @@ def clip_statistics(onset_times: np.ndarray, signal: np.ndarray, audio: np.ndarr
     intervals = np.diff(np.asarray(onset_times)) * f0
     share = float(np.mean(np.abs(intervals - 1.0) < PERIOD_TOLERANCE)) if intervals.size else 0.0
     acf_t0, acf_long, cents = periodicity(signal, sample_rate / f0)
-    return RegimeStatistics(onset_times.size / (duration * f0), share, acf_t0, acf_long, cents,
-                            level_db(audio, reference_rms))
+    spp = (onset_times.size / (duration * f0) if start is None
+           else slips_per_period(onset_times, start, start + duration, f0))
+    return RegimeStatistics(spp, share, acf_t0, acf_long, cents, level_db(audio, reference_rms))
 
 
 def hop_statistics(slip_onsets: np.ndarray, sounding_period: np.ndarray, audio: np.ndarray, *,
                    f0: np.ndarray, sample_rate: int, reference_rms: float,
-                   window_hops: int = 8,
-                   signal: np.ndarray | None = None) -> list[RegimeStatistics]:
+                   window_hops: int = 8, signal: np.ndarray | None = None,
+                   onset_times: np.ndarray | None = None,
+                   start_time: float = 0.0) -> list[RegimeStatistics]:
     """Measure every hop from a diagnostics table's columns, over a centred window of hops.
 
     Parameters
@@ -243,6 +283,11 @@ def hop_statistics(slip_onsets: np.ndarray, sounding_period: np.ndarray, audio: 
         What the periodicity tests read, aligned with ``audio`` (default ``audio``); the
         level and clipping are always the audio's. The evaluation passes the audio with
         other strings' ringing notes cancelled.
+    onset_times : np.ndarray [shape=(k,)], s, optional
+        The string's slip onsets: slips per period are then measured free of the window's
+        rounding (:func:`slips_per_period`); without them, counted from ``slip_onsets``.
+    start_time : float, s
+        Start of the first hop on the clock of ``onset_times``.
 
     Returns
     -------
@@ -257,11 +302,16 @@ def hop_statistics(slip_onsets: np.ndarray, sounding_period: np.ndarray, audio: 
     csum = np.concatenate([[0.0], np.cumsum(onsets)])
     gsum = np.concatenate([[0.0], np.cumsum(good & (onsets > 0))])
     hsum = np.concatenate([[0.0], np.cumsum(onsets > 0)])
+    times = None if onset_times is None else np.sort(np.asarray(onset_times, np.float64))
     out = []
     for k in range(n):
         a, b = max(0, k - half), min(n, k + half)
         span = (b - a) * HOP / sample_rate
         spp = (csum[b] - csum[a]) / (span * f0[k])
+        if times is not None:
+            lo, hi = start_time + a * HOP / sample_rate, start_time + b * HOP / sample_rate
+            near = times[np.searchsorted(times, lo):np.searchsorted(times, hi)]
+            spp = slips_per_period(near, lo, hi, f0[k])
         heard = hsum[b] - hsum[a]
         share = (gsum[b] - gsum[a]) / heard if heard else 0.0
         seg = audio[a * HOP:b * HOP + 3 * HOP]

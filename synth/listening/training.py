@@ -115,8 +115,11 @@ def teacher_note_classes(model: PairModel, semitones: float, *, force: float, K:
     onsets = np.array([d.slip_onsets for _, d in hops], np.float64)
     period = np.array([d.sounding_period for _, d in hops], np.float64)
     audio = np.concatenate([log.audio, np.zeros(4 * HOP, np.float32)]).astype(np.float64)
+    times = np.concatenate([d.onset_times for _, d in hops]) if hops else np.zeros(0)
     stats = hop_statistics(onsets, period, audio, f0=np.full(onsets.size, f0),
-                           sample_rate=44100, reference_rms=reference_rms(model.instrument))
+                           sample_rate=44100, reference_rms=reference_rms(model.instrument),
+                           onset_times=times, start_time=hops[0][0] * HOP / 44100 if hops
+                           else 0.0)
     speed = np.abs(plan.velocity[:, s])
     sustained = np.flatnonzero(speed >= 0.9 * speed.max())
     string_ref = load_instrument(model.instrument).strings[s].reference_force
