@@ -10,7 +10,10 @@
   quartet in ``--quartets DIR`` (default: the shared ``openscore-quartets``), all four parts
   rendered by the rules, each part's notes measured on its own stem; at each marked dynamic
   (rounded to a level) that every part plays at least 3 notes at, the spread (max - min) of
-  the parts' median loudness; a quartet's figure is the median of those spreads.
+  the parts' median loudness; a quartet's figure is the median of those spreads. With
+  ``--db DB`` the same quartets are also played by gesture sampling, open loop
+  (``quartets_sampling``: the balance a user gets from ``arco render --all-parts`` once a
+  database is present).
 
 ``--json`` prints exactly one JSON object on stdout; progress goes to stderr.
 """
@@ -109,15 +112,25 @@ def marked_levels(notes: pd.DataFrame, events: pd.DataFrame) -> np.ndarray:
     return np.round(notes["dynamic"].to_numpy()[order][idx])
 
 
-def quartet_figure(path: Path, config: dict, measures: int, seed: int = 0) -> dict:
-    from pipelines.methods.rules import render
+def quartet_figure(path: Path, config: dict, measures: int, seed: int = 0,
+                   database=None) -> dict:
+    """Balance of one quartet played by the rules (or, with ``database``, by sampling)."""
     from pipelines.score import read_score
     from pipelines.score.select import select_measures
 
     notes = select_measures(read_score(path), 1, measures)
     parts = sorted(int(p) for p in notes["part_index"].unique())
-    res = render(notes, config, parts=parts, seed=seed, sample_rate=SAMPLE_RATE,
-                 transpose_octaves=True, progress=False)
+    if database is None:
+        from pipelines.methods.rules import render
+
+        res = render(notes, config, parts=parts, seed=seed, sample_rate=SAMPLE_RATE,
+                     transpose_octaves=True, progress=False)
+    else:
+        from pipelines.methods.sampling import render_sampling
+
+        res = render_sampling(notes, db=database, feedback=False, parts=parts, config=config,
+                              seed=seed, sample_rate=SAMPLE_RATE, transpose_octaves=True,
+                              progress=False)
     rows = []
     for part in res.parts:
         ev = part.performance.events
@@ -140,13 +153,14 @@ def quartet_figure(path: Path, config: dict, measures: int, seed: int = 0) -> di
 
 
 def quartet_figures(config: dict, folder: Path, measures: int, limit: int | None,
-                    seed: int = 0) -> dict:
+                    seed: int = 0, database=None) -> dict:
     files = sorted(folder.glob("*.mxl"))[:limit]
     out: dict = {"per_quartet": {}}
     for f in files:
         t0 = time.perf_counter()
         try:
-            out["per_quartet"][f.stem] = fig = quartet_figure(f, config, measures, seed)
+            out["per_quartet"][f.stem] = fig = quartet_figure(f, config, measures, seed,
+                                                              database)
         except Exception as exc:  # a bench reports what failed and goes on
             out["per_quartet"][f.stem] = {"error": f"{type(exc).__name__}: {exc}"}
             say(f"  {f.stem[:40]}: {type(exc).__name__}: {exc}")
@@ -173,19 +187,30 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--skip-quartets", action="store_true", help="only the scales")
     p.add_argument("--rules-config", metavar="TOML", help="rules settings to merge")
     p.add_argument("--seed", type=int, default=0, help="seed of the rules' renders (0)")
+    p.add_argument("--db", metavar="DB", help="also play the quartets by gesture sampling "
+                   "(open loop) from this database")
+    p.add_argument("--skip-scales", action="store_true", help="only the quartets")
     args = p.parse_args(argv)
     config = load_config(args.rules_config)
     t0 = time.perf_counter()
     result: dict = {"settings": {"sample_rate": SAMPLE_RATE, "measures": args.measures,
                                  "seed": args.seed,
                                  "loudness": "BS.1770 ungated per note, mono stem"}}
-    with tempfile.TemporaryDirectory() as tmp:
-        say("scales ...")
-        result["scale"] = scale_figures(config, Path(tmp), args.seed)
+    if not args.skip_scales:
+        with tempfile.TemporaryDirectory() as tmp:
+            say("scales ...")
+            result["scale"] = scale_figures(config, Path(tmp), args.seed)
     if not args.skip_quartets:
         say("quartets ...")
         result["quartets"] = quartet_figures(config, Path(args.quartets), args.measures,
                                              args.limit, args.seed)
+        if args.db:
+            from pipelines.methods.sampling import open_database
+
+            say("quartets, gesture sampling ...")
+            result["quartets_sampling"] = quartet_figures(
+                config, Path(args.quartets), args.measures, args.limit, args.seed,
+                open_database(args.db))
     result["elapsed_s"] = time.perf_counter() - t0
     text = json.dumps(clean(result))
     print(text if args.json else json.dumps(clean(result), indent=1))
