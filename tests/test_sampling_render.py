@@ -137,6 +137,13 @@ def test_render_sampling_open_loop(tiny_db, scale):
     again = render_sampling(scale, db=sdb, feedback=False, progress=False, audio=False)
     pd.testing.assert_frame_equal(again.parts[0].performance.actions,
                                   part.performance.actions)
+    # the stem was brought to its marked loudness: measured again, nothing is left to move
+    from pipelines.methods.stem_balance import part_gain_db
+    from pipelines.perform.config import load_config
+
+    assert np.isfinite(part.extras["gain_db"])
+    left = part_gain_db(part.audio, 44100, part.performance.events, load_config())
+    assert abs(left) < 0.05
 
 
 def test_missing_database_is_a_clear_error(tmp_path, scale):

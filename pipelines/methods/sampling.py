@@ -298,7 +298,6 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
     from tqdm import tqdm
 
     from pipelines.perform.config import load_config
-
     if sample_rate <= 0:
         raise ParameterError(f"sample_rate={sample_rate} must be > 0")
     parts = _parts_to_play(notes, parts, instrument)
@@ -319,10 +318,23 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
         if audio:
             _play(rendered, models if closed else None, sample_rate=sample_rate, seed=seed,
                   diagnostics=diagnostics, engine=engine, search=database.search_config)
+            _balance_stem(rendered, sample_rate, config, database.search_config)
         result.parts.append(rendered)
     if audio:
         result.audio = mix([p.audio for p in result.parts])
     return result
+
+
+def _balance_stem(part: SampledPart, sample_rate: int, config: dict[str, Any],
+                  search: dict) -> None:
+    """One gain on the part's stem to its marked loudness (``[render] balance_parts``)."""
+    from pipelines.methods.stem_balance import part_gain_db
+
+    if not float(search.get("render", {}).get("balance_parts", 0.0)):
+        return
+    gain = part_gain_db(part.audio, sample_rate, part.performance.events, config)
+    part.audio = (np.asarray(part.audio, np.float64) * 10.0 ** (gain / 20.0)).astype(np.float32)
+    part.extras["gain_db"] = gain
 
 
 def _parts_to_play(notes: pd.DataFrame, parts: list[int] | None,
