@@ -35,6 +35,7 @@ from pipelines.methods.playable import loop_range, playable_band, to_playable
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.methods.sampling_db import SamplingDatabase, adapt_forces, open_database
 from pipelines.methods.sampling_left_hand import play_left_hand
+from pipelines.perform.config import load_config
 from pipelines.perform.events import Event, Performance, events_table
 from pipelines.perform.rules import fermata_warp
 from pipelines.perform.shared_phrasing import score_arch
@@ -297,7 +298,6 @@ def render_sampling(notes: pd.DataFrame, *, db: str | os.PathLike | SamplingData
     """
     from tqdm import tqdm
 
-    from pipelines.perform.config import load_config
     if sample_rate <= 0:
         raise ParameterError(f"sample_rate={sample_rate} must be > 0")
     parts = _parts_to_play(notes, parts, instrument)
@@ -443,7 +443,6 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
         hop_plan,
         played_actions,
     )
-    from pipelines.perform.config import load_config
     from synth.engines import get_engine
     from synth.listening.classifier import load_models
     from synth.listening.controller import play_plan
