@@ -28,7 +28,6 @@ import pandas as pd
 
 from data_schemas.errors import ParameterError
 from pipelines.listening import note_measures as nm
-from pipelines.listening.settled import cancel_period
 from pipelines.listening.spans import NoteSpan, find_notes, spans_from_actions, spans_from_times
 from synth.listening.features import HOP
 from synth.listening.teacher import (
@@ -251,16 +250,9 @@ def _without_ringing(span: NoteSpan, first_hop: int, end_hop: int, ctx: _Context
     another string is the violin's own sound, not a fault of the bowed note, but heard
     through the autocorrelation it reads as anomalous low frequencies or noise.
     """
-    start = first_hop * HOP
     stop = min((end_hop + TEACHER_TAIL_HOPS) * HOP, ctx.audio.size)
-    periods = nm.ringing_periods(span, ctx.all_spans, ctx.sample_rate)
-    if not periods:
-        return ctx.audio[start:stop]
-    lo = max(start - int(np.ceil(sum(periods))) - len(periods), 0)
-    x = ctx.audio[lo:stop]
-    for p in periods:
-        x = cancel_period(x, p)
-    return x[start - lo:]
+    return nm.cancelled(ctx.audio, first_hop * HOP, stop,
+                        nm.ringing_periods(span, ctx.all_spans, ctx.sample_rate))
 
 
 def _bowing(span: NoteSpan, t: np.ndarray, actions: pd.DataFrame | None):

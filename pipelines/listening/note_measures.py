@@ -168,6 +168,19 @@ def ringing_periods(span: NoteSpan, earlier: list[NoteSpan], sample_rate: int,
     return out
 
 
+def cancelled(signal: np.ndarray, start: int, stop: int, periods: list[float]) -> np.ndarray:
+    """``signal[start:stop]`` with each of ``periods`` (samples) cancelled.
+
+    Each period is removed by :func:`~pipelines.listening.settled.cancel_period`, whose
+    comb reads the samples just before ``start`` (from the signal's start at most).
+    """
+    lo = max(start - int(np.ceil(sum(periods))) - len(periods), 0)
+    x = signal[lo:stop]
+    for p in periods:
+        x = settled.cancel_period(x, p)
+    return x[start - lo:]
+
+
 def from_waveform(span: NoteSpan, pre: np.ndarray, hops: np.ndarray, sample_rate: int,
                   start: float | None = None, ringing: list[float] | None = None,
                   ) -> tuple[np.ndarray, float, np.ndarray]:
@@ -194,12 +207,7 @@ def from_waveform(span: NoteSpan, pre: np.ndarray, hops: np.ndarray, sample_rate
     i1 = int(round(span.t1 * sample_rate))
     length = max(i1 - i0, 0)
     ringing = list(ringing or [])
-    pad = int(np.ceil(sum(ringing))) + len(ringing)
-    lo = max(i0 - pad, 0)
-    x = pre[lo:i1 + int(np.ceil(3 * period))]
-    for p in ringing:
-        x = settled.cancel_period(x, p)
-    x = x[i0 - lo:]
+    x = cancelled(pre, i0, i1 + int(np.ceil(3 * period)), ringing)
     corr = regularity.period_correlation(x, period)[:length]
     far, tolerance = settled.settled_distance(x, period, length, sample_rate)
     regular = (corr >= regularity.CORRELATION) & (far <= tolerance)

@@ -306,9 +306,9 @@ def hop_statistics(slip_onsets: np.ndarray, sounding_period: np.ndarray, audio: 
     out = []
     for k in range(n):
         a, b = max(0, k - half), min(n, k + half)
-        span = (b - a) * HOP / sample_rate
-        spp = (csum[b] - csum[a]) / (span * f0[k])
-        if times is not None:
+        if times is None:
+            spp = (csum[b] - csum[a]) / ((b - a) * HOP / sample_rate * f0[k])
+        else:
             lo, hi = start_time + a * HOP / sample_rate, start_time + b * HOP / sample_rate
             near = times[np.searchsorted(times, lo):np.searchsorted(times, hi)]
             spp = slips_per_period(near, lo, hi, f0[k])
