@@ -96,7 +96,7 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame, *,
     if not bowed:
         raise ParameterError("the part has no bowed notes to sample gestures for")
     n = len(bowed)
-    rest_after = np.array([e.rest_after for e in bowed])
+    rest_after = np.array([e.rest_after for e in bowed], bool)
     t0 = np.array([e.t0 for e in bowed])
     joined_next = ~rest_after[:-1] & (np.abs(t0[1:] - np.array([e.end for e in bowed[:-1]]))
                                       < 1e-3)
@@ -109,7 +109,7 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame, *,
     # a slur position that the run breaks is re-derived from the neighbours in the slur
     in_slur = tech == "legato"
     prev_s = np.r_[False, in_slur[1:] & in_slur[:-1] & has_prev[1:]
-                   & np.array([b.cont for b in bowed[1:]])]
+                   & np.array([b.cont for b in bowed[1:]], bool)]
     next_s = np.r_[prev_s[1:], False]
     slur = np.where(in_slur, chain_positions(prev_s, next_s), slur)
     tech = np.where(in_slur & (slur == "iso"), "detache", tech)

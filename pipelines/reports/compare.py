@@ -140,11 +140,36 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
                                          excerpt=job["excerpt"], seed=job["seed"])
     except ArcoError as exc:
         return {**key, "figures": {"error": str(exc)}, "notes": [], "media": None}
+    except Exception as exc:  # a bug: report it with its place, keep the other renders
+        return {**key, "figures": {"error": internal_error(exc)}, "notes": [], "media": None}
     media = None
     if job["media_dir"] is not None:
         media = write_media(output, Path(job["media_dir"]), job["excerpt"], job["method"],
                             sample_rate=job["sample_rate"])
     return {**key, "figures": figures, "notes": notes, "media": media}
+
+
+def internal_error(exc: BaseException) -> str:
+    """One line for an unexpected exception: its type, message and innermost place.
+
+    A render that fails on a bug (not an :class:`~data_schemas.errors.ArcoError`) leaves its
+    excerpt out of the comparison like any failed render, instead of ending a run of many
+    renders; the line says it is a bug and where it was raised.
+
+    Examples
+    --------
+    >>> try:
+    ...     [] + None
+    ... except TypeError as exc:
+    ...     internal_error(exc).startswith("internal error (a bug, please report it): TypeError")
+    True
+    """
+    import traceback
+
+    frames = traceback.extract_tb(exc.__traceback__)
+    where = f" at {Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else ""
+    return (f"internal error (a bug, please report it): {type(exc).__name__}: "
+            f"{exc}{where}")
 
 
 def read_excerpt(e: Excerpt) -> tuple[Any, list[int]]:
