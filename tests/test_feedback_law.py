@@ -99,6 +99,47 @@ def test_probabilities_sum_to_one_and_order_like_the_decisions(n_class):
     assert np.all(np.diff([vote_probabilities(np.array([v]), 2)[0] for v in values]) > 0)
 
 
+class OptimumPredictor(PlantPredictor):
+    """The plant of the module doc around another optimum (a factor on a planned force)."""
+
+    def __init__(self, optimum):
+        self.optimum = optimum
+
+    def probabilities(self, features):
+        return super().probabilities(np.array([features[0] * F_OPT / self.optimum]))
+
+
+def run_factor(optimum, settings, hops=80):
+    """The correcting factor, hop by hop, on a plant whose best factor is ``optimum``."""
+    ctl = ForceController(PlantModel(), np.random.default_rng(0), settings)
+    ctl.predict = OptimumPredictor(optimum)
+    ctl.start_note(0.0, 1.0)
+    heard = deque([1.0] * LAG, maxlen=LAG)
+    factors = []
+    for _ in range(hops):
+        ctl.step(np.array([heard[0]]), 0.3, 0.3)
+        heard.append(ctl.force)
+        factors.append(ctl.force)
+    return np.array(factors)
+
+
+@pytest.mark.parametrize("optimum", [2.0, 3.0, 0.5, 0.3])
+def test_trim_up_bounds_only_the_raise(optimum):
+    both = ControllerSettings(jitter=0.0, grace_hops=0, range_margin=0.0, trim=1.5)
+    lighten = ControllerSettings(jitter=0.0, grace_hops=0, range_margin=0.0, trim=1.5,
+                                 trim_up=1.0)
+    free, down = run_factor(optimum, both), run_factor(optimum, lighten)
+    # the symmetric trim reaches the optimum's side (class 3 holds half the probability
+    # within about half an octave of it) or the trim's bound
+    reachable = min(max(optimum, 1 / 1.5), 1.5)
+    assert abs(np.log2(free[-1] / reachable)) < 0.5
+    if optimum > 1.0:  # more force wanted: never above the plan with trim_up = 1
+        assert down.max() == 1.0 and free[-1] > 1.2
+    else:  # less force wanted: the same correction as the symmetric trim
+        np.testing.assert_array_equal(down, free)
+        assert down.min() >= 1 / 1.5 - 1e-12
+
+
 def test_initial_forces_monotone_in_dynamic():
     from synth.listening.initial_forces import monotone_in_dynamic
 

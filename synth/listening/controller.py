@@ -61,6 +61,11 @@ class ControllerSettings:
         were heard as classes 4-5 and pulled the force down).
     trim : float
         Correcting a planned force: the factor stays within ``1 / trim .. trim`` (0: off).
+    trim_up : float
+        Correcting a planned force: the factor's upper bound instead of ``trim`` (0: ``trim``;
+        1: the law only lightens). On the instrument model, more force does not end multiple
+        slipping once it has set in (the README, "Why the law costs on music"), while less
+        force does end a pressed sound.
     sure : float
         No correction while neither side ("too little": classes 1-2, "too much": 4-5)
         holds at least this probability (0: off).
@@ -87,6 +92,7 @@ class ControllerSettings:
     good_share: float = 0.5
     change_hops: int = 8
     trim: float = 0.0
+    trim_up: float = 0.0
     sure: float = 0.0
     practised_start: bool = False
     periodic_gate: float = 0.0
@@ -127,7 +133,7 @@ class ForceController:
         self.bounds = ((good[0] / margin, min(good[1] * margin, MAX_FORCE)) if good and margin
                        else (0.0, MAX_FORCE))
         if self.settings.trim:
-            self.bounds = (1.0 / self.settings.trim, self.settings.trim)
+            self.bounds = (1.0 / self.settings.trim, self.settings.trim_up or self.settings.trim)
 
     def start_note(self, semitones: float, force: float | None = None) -> None:
         """Begin a note: initial force of the pair at this finger (or ``force``), N."""

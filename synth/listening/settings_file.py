@@ -33,6 +33,7 @@ RANGES: dict[str, dict[str, tuple[type, float, float]]] = {
         "good_share": (float, 0.0, 1.0),
         "change_hops": (int, 0, 100000),
         "trim": (float, 0.0, 100.0),
+        "trim_up": (float, 0.0, 100.0),
         "sure": (float, 0.0, 1.0),
         "practised_start": (bool, 0.0, 1.0),
         "periodic_gate": (float, 0.0, 1.0),
