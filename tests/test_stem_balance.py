@@ -6,6 +6,7 @@ amplitude (a 997 Hz sine of amplitude 1 reads -3.01 LUFS).
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from pipelines.methods.stem_balance import MAX_GAIN_DB, goal_loudness, part_gain_db
 from pipelines.perform.config import load_config
@@ -41,3 +42,15 @@ def test_the_gain_is_bounded_and_silent_or_plucked_parts_keep_their_level():
     assert part_gain_db(np.zeros(SR), SR, events, cfg) == 0.0
     audio, plucked = _notes([0.1], [5.0], direction=0)
     assert part_gain_db(audio, SR, plucked, cfg) == 0.0
+
+
+def test_the_gain_keeps_the_stem_under_the_mix_ceiling():
+    from pipelines.methods.result import PEAK
+
+    cfg = load_config()
+    audio, events = _notes([0.01, 0.01, 0.5], [5.0, 5.0, 5.0])  # the median far too soft
+    goal = goal_loudness(events, cfg)[0]
+    wanted = goal - (-3.01 + 20 * np.log10(0.01))
+    gain = part_gain_db(audio, SR, events, cfg)
+    assert wanted > 18.0 and gain < wanted
+    assert np.max(np.abs(audio)) * 10 ** (gain / 20) == pytest.approx(PEAK, rel=1e-9)

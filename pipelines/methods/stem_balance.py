@@ -8,7 +8,11 @@ sampled note's bow speed to its lane balanced the quartets but cost Helmholtz mo
 (README "Balance of sampled quartets"), so the playing is left as sampled and the part's
 stem gets one gain, as a balance engineer would set it: the median, over the part's bowed
 notes, of the marked loudness (the marking's target plus the phrase arch, as the rules
-aim for) minus the note's measured loudness (BS.1770, ungated).
+aim for) minus the note's measured loudness (BS.1770, ungated), lowered where it would
+take the stem's peak over the mix's ceiling (:data:`pipelines.methods.result.PEAK`).
+Without that ceiling a sampled cello whose loudest notes stood 13 dB over its median peaked
+at 2.4 of full scale, and the evaluation heard every hop of those notes as clipping (class
+5).
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from pipelines.methods.result import PEAK
 from pipelines.perform.loudness import target
 from pipelines.reports.loudness import SILENCE, note_loudness
 
@@ -57,7 +62,8 @@ def part_gain_db(audio: np.ndarray, sample_rate: int, events: pd.DataFrame,
     Returns
     -------
     float
-        Within +-:data:`MAX_GAIN_DB`; 0 when no bowed note sounds.
+        Within +-:data:`MAX_GAIN_DB`, and at most what takes the stem's peak to
+        :data:`~pipelines.methods.result.PEAK`; 0 when no bowed note sounds.
 
     Examples
     --------
@@ -79,7 +85,8 @@ def part_gain_db(audio: np.ndarray, sample_rate: int, events: pd.DataFrame,
     if not heard.any():
         return 0.0
     miss = goal_loudness(bowed, config)[heard] - measured[heard]
-    return float(np.clip(np.median(miss), -MAX_GAIN_DB, MAX_GAIN_DB))
+    headroom = 20.0 * np.log10(PEAK / float(np.max(np.abs(audio))))
+    return float(np.clip(min(np.median(miss), headroom), -MAX_GAIN_DB, MAX_GAIN_DB))
 
 
 __all__ = ["MAX_GAIN_DB", "goal_loudness", "part_gain_db"]
