@@ -63,9 +63,9 @@ class ControllerSettings:
         Correcting a planned force: the factor stays within ``1 / trim .. trim`` (0: off).
     trim_up : float
         Correcting a planned force: the factor's upper bound instead of ``trim`` (0: ``trim``;
-        1: the law only lightens). On the instrument model, more force does not end multiple
-        slipping once it has set in (the README, "Why the law costs on music"), while less
-        force does end a pressed sound.
+        1: the law only lightens). On the instrument model more force did not end multiple
+        slipping once it had set in; lightening only helped feedback on the tuning set, not
+        on the held-out protocol (the README, "The law only lightens").
     sure : float
         No correction while neither side ("too little": classes 1-2, "too much": 4-5)
         holds at least this probability (0: off).
