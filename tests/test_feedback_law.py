@@ -140,6 +140,13 @@ def test_trim_up_bounds_only_the_raise(optimum):
         assert down.min() >= 1 / 1.5 - 1e-12
 
 
+def test_trim_up_below_the_plan_is_refused():
+    from data_schemas.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="trim_up=0.5 must be 0"):
+        ControllerSettings(trim=1.5, trim_up=0.5)
+
+
 def test_initial_forces_monotone_in_dynamic():
     from synth.listening.initial_forces import monotone_in_dynamic
 

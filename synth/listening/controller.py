@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from data_schemas.errors import ParameterError
 from data_schemas.instruments import finger_ratio
 from synth.controls import Block, BowControl
 from synth.engines import Engine
@@ -96,6 +97,11 @@ class ControllerSettings:
     sure: float = 0.0
     practised_start: bool = False
     periodic_gate: float = 0.0
+
+    def __post_init__(self) -> None:
+        if 0.0 < self.trim_up < 1.0:
+            raise ParameterError(f"trim_up={self.trim_up} must be 0 (off) or at least 1: the "
+                                 f"factor's upper bound may not lie below the plan")
 
 
 class ForceController:
