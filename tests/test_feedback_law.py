@@ -36,8 +36,11 @@ class PlantModel:
         return PlantPredictor()
 
 
-def run(start, settings, hops=60, K=None):
+def play(start, settings, hops, K=None, predictor=None):
+    """The controller's force, hop by hop, on the plant (or ``predictor``)."""
     ctl = ForceController(PlantModel(), np.random.default_rng(0), settings, K=K)
+    if predictor is not None:
+        ctl.predict = predictor
     ctl.start_note(0.0, start)
     heard = deque([start] * LAG, maxlen=LAG)
     forces = []
@@ -45,7 +48,11 @@ def run(start, settings, hops=60, K=None):
         ctl.step(np.array([heard[0]]), 0.3, 0.3)
         heard.append(ctl.force)
         forces.append(ctl.force)
-    return np.abs(np.log2(np.array(forces) / F_OPT))
+    return np.array(forces)
+
+
+def run(start, settings, hops=60, K=None):
+    return np.abs(np.log2(play(start, settings, hops, K) / F_OPT))
 
 
 SETTINGS = ControllerSettings(jitter=0.0, grace_hops=0, range_margin=0.0)
@@ -111,16 +118,7 @@ class OptimumPredictor(PlantPredictor):
 
 def run_factor(optimum, settings, hops=80):
     """The correcting factor, hop by hop, on a plant whose best factor is ``optimum``."""
-    ctl = ForceController(PlantModel(), np.random.default_rng(0), settings)
-    ctl.predict = OptimumPredictor(optimum)
-    ctl.start_note(0.0, 1.0)
-    heard = deque([1.0] * LAG, maxlen=LAG)
-    factors = []
-    for _ in range(hops):
-        ctl.step(np.array([heard[0]]), 0.3, 0.3)
-        heard.append(ctl.force)
-        factors.append(ctl.force)
-    return np.array(factors)
+    return play(1.0, settings, hops, predictor=OptimumPredictor(optimum))
 
 
 @pytest.mark.parametrize("optimum", [2.0, 3.0, 0.5, 0.3])
