@@ -124,8 +124,10 @@ class DynamicsTable:
     level : tuple of float
         Dynamic levels of the rows, increasing.
     velocity : tuple of float, m/s
-    force : tuple of float
-        N (``violinist``) or multiples of each string's reference force (``bow_lanes``).
+    force : tuple of float, N
+        The violinist's force on a violin; empty for ``bow_lanes``, whose forces are the
+        rules' own table in newtons per instrument and string (``pipelines/perform/rules.toml``
+        ``[bow_force.<instrument>]``).
     beta : tuple of float
     """
 
@@ -179,14 +181,18 @@ def _instrument(entry: dict, where: str) -> InstrumentFacts:
 
 def _dynamics(name: str, entry: dict) -> DynamicsTable:
     where = f"dynamics.{name}"
+    keys = ("velocity", "beta") if name == "bow_lanes" else ("velocity", "force", "beta")
     try:
-        columns = {k: tuple(_positive(x, f"{where}.{k}") for x in entry[k])
-                   for k in ("velocity", "force", "beta")}
+        columns = {k: tuple(_positive(x, f"{where}.{k}") for x in entry[k]) for k in keys}
     except KeyError as exc:
         raise SchemaError(f"{_path()}: {where} has no {exc.args[0]!r}") from None
+    if "force" in entry and name == "bow_lanes":
+        raise SchemaError(f"{_path()}: {where}.force: the rules' forces are newtons per "
+                          "string in pipelines/perform/rules.toml [bow_force.<instrument>]")
     n = len(columns["beta"])
     level = tuple(float(x) for x in entry.get("level", range(n)))
-    if any(len(c) != len(level) for c in columns.values()) or \
+    columns.setdefault("force", ())
+    if any(len(c) != len(level) for k, c in columns.items() if k in keys) or \
             list(level) != sorted(set(level)) or max(columns["beta"]) >= 0.5:
         raise SchemaError(f"{_path()}: {where}: level, velocity, force and beta must have one "
                           "entry per level, levels increasing, beta < 0.5")

@@ -51,7 +51,7 @@ def test_rules_defaults_come_from_the_facts():
         assert cfg["instruments"][name]["bow_length"] == facts["bow_length"]
     assert cfg["bow"]["max_acceleration"] == FACTS["limits"]["max_bow_acceleration"]
     lanes = FACTS["dynamics"]["bow_lanes"]
-    assert {k: cfg["dynamics"][k] for k in ("beta", "velocity", "force")} == lanes
+    assert {k: cfg["dynamics"][k] for k in ("beta", "velocity")} == lanes
 
 
 def test_user_rules_may_still_override_bow_length_and_dynamics(tmp_path):

@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from data_schemas.errors import ParameterError
+from data_schemas.instruments import instrument_facts
 from data_schemas.sampling import SAMPLE_CHOICES
 from pipelines.methods.playable import (
     BLEND,
@@ -19,6 +20,7 @@ from pipelines.methods.playable import (
     window_middle,
 )
 from pipelines.perform.config import load_config
+from pipelines.perform.rules import string_force_factors
 
 REFS = np.array([1.5, 1.5, 0.5, 0.5])
 RATE = 240.0
@@ -46,11 +48,20 @@ def _ratio(actions: pd.DataFrame, rows: np.ndarray) -> np.ndarray:
                                                      a["beta"].to_numpy())
 
 
-def test_window_middle_is_the_rules_lanes():
-    """Each lane of the rules (pppp..ffff) lies on the window middle, to the table's rounding."""
-    lanes = load_config()["dynamics"]
-    for beta, v, force in zip(lanes["beta"], lanes["velocity"], lanes["force"], strict=True):
-        assert window_middle(1.0, v, beta) == pytest.approx(force, rel=0.02)
+@pytest.mark.parametrize("instrument", ["violin", "viola", "cello"])
+def test_the_rules_newton_table_follows_the_window_middle(instrument):
+    """Each string's row of the rules' newton table (pppp..ffff) lies on its window middle
+    at the lanes' beta and velocity, times one factor per instrument (about 1 to 1.3)."""
+    cfg = load_config()
+    lanes = cfg["dynamics"]
+    refs = string_force_factors(instrument)
+    for string, name in enumerate(instrument_facts(instrument).string_names):
+        row = np.asarray(cfg["bow_force"][instrument][name])
+        middle = window_middle(refs[string], np.asarray(lanes["velocity"]),
+                               np.asarray(lanes["beta"]))
+        ratio = row / middle
+        assert np.ptp(ratio) / ratio.mean() < 0.04, (name, ratio)
+        assert 0.98 <= ratio.mean() <= 1.35
 
 
 def test_window_middle_scales_between_the_edges():

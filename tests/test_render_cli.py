@@ -47,7 +47,11 @@ def test_config_override(score, tmp_path, capsys):
     # rehearsal would hear the louder notes and bow them softer: off in both
     plain, cfg = tmp_path / "plain.toml", tmp_path / "rules.toml"
     plain.write_text("[loudness]\nrehearsals = 0\n")
-    cfg.write_text("[loudness]\nrehearsals = 0\n[instruments.violin]\nforce_scale = 2.0\n")
+    from pipelines.perform.config import load_config
+
+    rows = load_config()["bow_force"]["violin"]
+    cfg.write_text("[loudness]\nrehearsals = 0\n[bow_force.violin]\n" + "".join(
+        f"{name} = {[2.0 * f for f in row]}\n" for name, row in rows.items()))
     outs = []
     for extra in (("--config", plain), ("--config", cfg)):
         path = tmp_path / f"a{len(outs)}.parquet"
@@ -55,10 +59,11 @@ def test_config_override(score, tmp_path, capsys):
                            "--quiet", *extra)
         assert code == 0, err
         outs.append(read_actions(path)["bow_force"].max())
-    from pipelines.perform.config import load_config
-
-    default = load_config()["instruments"]["violin"]["force_scale"]
-    assert outs[1] == pytest.approx(2.0 / default * outs[0])
+    assert outs[1] == pytest.approx(2.0 * outs[0])
+    cfg.write_text("[instruments.violin]\nforce_scale = 2.0\n")
+    code, _, err = run(capsys, "render", score, "--method", "rules", "--actions",
+                       tmp_path / "x.parquet", "--config", cfg)
+    assert code == 2 and "instruments.violin.force_scale" in err and "[bow_force." in err
     cfg.write_text("[bow]\nmax_acceleration = -1\n")
     code, _, err = run(capsys, "render", score, "--method", "rules", "--actions",
                        tmp_path / "x.parquet", "--config", cfg)

@@ -10,7 +10,7 @@ from _notation_score import write_score
 from data_schemas.actions import validate_actions
 from data_schemas.instruments import finger_ratio, instrument_facts
 from pipelines.perform.config import dynamic_table, load_config
-from pipelines.perform.rules import perform_part, string_force_factors
+from pipelines.perform.rules import perform_part
 from pipelines.score import read_score
 
 CFG = load_config()
@@ -118,12 +118,17 @@ def test_dynamics_set_beta_and_velocity(perf):
     assert f["bow_velocity"].abs().max() == pytest.approx(table("velocity", 6.0), abs=1e-6)
 
 
-def test_force_comes_from_the_dynamic_table(perf):
+def _table_newtons(instrument: str, string: int, level: int) -> float:
+    """The rules' newton table read straight from the configuration."""
+    name = instrument_facts(instrument).string_names[string]
+    return CFG["bow_force"][instrument][name][level]
+
+
+def test_force_comes_from_the_newton_table(perf):
     mid = bowed(perf, 0.45, 0.55)
-    factor = (string_force_factors("violin")[mid["string"].to_numpy(int)]
-              * CFG["instruments"]["violin"]["force_scale"])
+    strings = mid["string"].to_numpy(int)
     assert mid["bow_force"].to_numpy() == pytest.approx(
-        float(dynamic_table(CFG, "force", [5.0])[0]) * factor)
+        [_table_newtons("violin", s, 5) for s in strings])
 
 
 def test_detached_notes_stop_and_reverse(perf):
@@ -364,8 +369,7 @@ def test_instrument_override_changes_force(notes, perf):
     ratio = force_at(viola, 0.5) / force_at(perf, 0.5)
     string_violin = int(bowed(perf, 0.5, 0.51)["string"].iloc[0])
     string_viola = int(bowed(viola, 0.5, 0.51)["string"].iloc[0])
-    scale = {name: CFG["instruments"][name]["force_scale"] for name in ("violin", "viola")}
-    expected = (scale["viola"] * string_force_factors("viola")[string_viola]
-                / (scale["violin"] * string_force_factors("violin")[string_violin]))
+    expected = (_table_newtons("viola", string_viola, 5)
+                / _table_newtons("violin", string_violin, 5))
     assert ratio == pytest.approx(expected)
     assert ratio != pytest.approx(1.0)

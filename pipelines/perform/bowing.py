@@ -21,7 +21,7 @@ from data_schemas.bow import BowBudget
 from data_schemas.instruments import finger_ratio, limits
 from pipelines.perform.bow_distribution import distribute
 from pipelines.perform.bow_speed import limit_acceleration, stroke_acceleration
-from pipelines.perform.config import dynamic_table
+from pipelines.perform.config import bow_force, dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
 from pipelines.perform.ornaments import ornament_cents
@@ -246,10 +246,16 @@ def _retake(prev: Stroke, s: Stroke, first: Event, gap: float) -> bool:
     return (first.t0 - prev.stop) >= gap or prev.direction == s.direction
 
 
-def _force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float) -> np.ndarray:
+def _force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float, instrument: str,
+           string: int) -> np.ndarray:
+    """Bow force (N) of event ``e`` on ``string`` at times ``t``.
+
+    The newton table's force at the event's dynamic, times ``scale`` and the articulation's
+    shape.
+    """
     art = config["articulations"]
     tech = config["techniques"]
-    force = dynamic_table(config, "force", _dynamic_at(e, t)) * scale
+    force = bow_force(config, instrument, string, _dynamic_at(e, t)) * scale
     if e.technique == "col_legno":
         force = force * tech["col_legno_force"]
     if len(e.strings) > 1:
@@ -282,7 +288,7 @@ def _beta(e: Event, t: np.ndarray, config: dict[str, Any], scale: float = 1.0) -
 
 
 def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *,
-           force_scale: float = 1.0) -> pd.DataFrame:
+           instrument: str) -> pd.DataFrame:
     """Render planned strokes (and plucks) as control frames of the actions table.
 
     Parameters
@@ -292,9 +298,9 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
     strokes : list of Stroke
         :func:`plan` output for ``events``.
     config : dict
-        Rules configuration.
-    force_scale : float
-        Instrument force factor (viola, cello bow harder).
+        Rules configuration (its ``[bow_force.<instrument>]`` newton table).
+    instrument : str
+        ``violin``, ``viola`` or ``cello``: whose row of the newton table each string plays.
 
     Returns
     -------
@@ -315,7 +321,8 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                 t = np.append(t, seg_end - _TICK)
             speed = np.interp(t, s.t, s.speed)
             pos = np.interp(t, s.t, s.position)
-            force = _force(e, t, config, force_scale * s.force_scale)
+            force = {string: _force(e, t, config, s.force_scale, instrument, string)
+                     for string in {*e.strings, *(r[0] for r in e.roll)}}
             beta = _beta(e, t, config, s.beta_scale)
             n_roll = len(e.roll)
             sustain_from = e.t0 + n_roll * roll_time
@@ -323,12 +330,12 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                 a, b = e.t0 + j_roll * roll_time, e.t0 + (j_roll + 1) * roll_time
                 m = (t >= a) & (t < b)
                 if m.any():
-                    rows.append(_rows(t[m], string, semis, force[m], s.direction * speed[m],
-                                      beta[m], pos[m]))
+                    rows.append(_rows(t[m], string, semis, force[string][m],
+                                      s.direction * speed[m], beta[m], pos[m]))
                     rows.append(_lift(b, string, semis, beta[m][-1], pos[m][-1]))
             m = t >= sustain_from if n_roll else np.ones(t.shape, bool)
             for string, semis in zip(e.strings, e.semitones, strict=True):
-                rows.append(_rows(t[m], string, semis, force[m], s.direction * speed[m],
+                rows.append(_rows(t[m], string, semis, force[string][m], s.direction * speed[m],
                                   beta[m], pos[m], cents=string_cents(e, semis, t[m], config)
                                   + ornament_cents(e.ornament, t[m], floor=-100.0 * semis),
                                   **_fingers(e)))
@@ -343,7 +350,7 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                                           float(pos[-1]), **_fingers(e)))
     for e in events:
         if e.pizz:
-            rows.extend(_pluck(e, config))
+            rows.extend(_pluck(e, config, instrument))
     rows = [r for r in rows if len(r["time"])]
     if not rows:
         return pd.DataFrame({c: np.zeros(0) for c in _COLUMNS})
@@ -388,7 +395,7 @@ def _fingers(e: Event) -> dict[str, Any]:
     return {"touch": e.touch, "node": 0 if e.touch else e.node}
 
 
-def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: np.ndarray,
+def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: dict[int, np.ndarray],
                   beta: np.ndarray, pos: np.ndarray,
                   next_start: float | None) -> list[dict[str, np.ndarray]]:
     """After a stroke: lift the bow or keep it resting on the string.
@@ -408,7 +415,7 @@ def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: np.ndarray,
     for string, semis in zip(e.strings, e.semitones, strict=True):
         if same and not e.rest_after:
             if nxt.t0 - _TICK > end + _TICK:
-                out.append(_rows(np.array([nxt.t0 - _TICK]), string, semis, force[-1:],
+                out.append(_rows(np.array([nxt.t0 - _TICK]), string, semis, force[string][-1:],
                                  np.zeros(1), beta[-1:], pos[-1:], **_fingers(e)))
             continue
         lift = end + _TICK
@@ -418,14 +425,16 @@ def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: np.ndarray,
     return out
 
 
-def _pluck(e: Event, config: dict[str, Any]) -> list[dict[str, np.ndarray]]:
+def _pluck(e: Event, config: dict[str, Any], instrument: str) -> list[dict[str, np.ndarray]]:
     beta = float(_beta(e, np.array([e.t0]), config)[0])
-    # A pluck row's bow_force is its strength (1 N = the instrument's default pull, at mf).
-    strength = dynamic_table(config, "force", [e.dynamic]) / dynamic_table(config, "force", [5.0])
     out = []
     members = [*e.roll, *zip(e.strings, e.semitones, strict=True)]
     for j, (string, semis) in enumerate(members):
         t = e.t0 + 0.01 * j
+        # A pluck row's bow_force is its strength (1 N = the instrument's default pull, at
+        # mf): the string's bow force at the pluck's dynamic over its force at mf.
+        strength = (bow_force(config, instrument, string, [e.dynamic])
+                    / bow_force(config, instrument, string, [5.0]))
         out.append(_rows(np.array([t]), string, semis, strength, np.zeros(1),
                          np.array([beta]), np.array([0.5]), pluck=True, **_fingers(e)))
         if e.end - _TICK > t + _TICK:

@@ -3,9 +3,8 @@
 The loudness calibration (``bench/calibrate_loudness.py``) and the pitch calibration
 (``bench/calibrate_pitch.py``) both have the instrument model play one steady note per row
 of a grid of (string, semitone, level), each bowed for :data:`NOTE` s at the lane's beta,
-velocity and force (force in multiples of the string's reference force times the
-instrument's ``[instruments.<name>] force_scale``, as the rules play) with :data:`GAP` s
-of silence between notes, bow direction alternating.
+velocity and the rules' newton table's force (``[bow_force.<instrument>]``, as the rules
+play) with :data:`GAP` s of silence between notes, bow direction alternating.
 """
 
 from __future__ import annotations
@@ -40,7 +39,8 @@ def steady_actions(instrument: str, notes: pd.DataFrame, config: dict[str, Any],
     notes : pandas.DataFrame
         Columns ``string``, ``semitone`` and ``level`` (lane level 0..9).
     config : dict
-        Rules configuration (its lanes, the instrument's ``force_scale`` and ``[vibrato]``).
+        Rules configuration (its lanes, the instrument's newton table ``[bow_force]`` and
+        ``[vibrato]``).
     vibrato : bool
         Stopped notes with the rules' mf vibrato (a sine of ``[vibrato] extent`` cents at
         ``rate``: a resonance narrower than the vibrato is heard as the vibrato sweeps it);
@@ -59,16 +59,14 @@ def steady_actions(instrument: str, notes: pd.DataFrame, config: dict[str, Any],
     >>> float(rows["time"].max()) == NOTE + 0.02
     True
     """
-    from pipelines.perform.config import dynamic_table
-    from pipelines.perform.rules import string_force_factors
+    from pipelines.perform.config import bow_force, dynamic_table
 
-    ref = string_force_factors(instrument) * config["instruments"][instrument]["force_scale"]
     vib = config["vibrato"]
     frames = []
     for k, (t0, n) in enumerate(zip(note_starts(len(notes)), notes.itertuples(), strict=True)):
         level = np.array([n.level])
         v = float(dynamic_table(config, "velocity", level)[0])
-        f = float(dynamic_table(config, "force", level)[0]) * ref[n.string]
+        f = float(bow_force(config, instrument, int(n.string), level)[0])
         b = float(dynamic_table(config, "beta", level)[0])
         t = np.concatenate([[t0], np.arange(t0 + 0.03, t0 + NOTE, FRAME),
                             [t0 + NOTE, t0 + NOTE + 0.02]])

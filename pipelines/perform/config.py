@@ -1,10 +1,12 @@
 """The performance-rules configuration: shipped TOML defaults, validated, overridable.
 
 The defaults live in ``pipelines/perform/rules.toml`` (package data), plus what the
-instrument facts (:mod:`data_schemas.instruments`) already say: the dynamics table
-(``[dynamics]``, the facts' bow lanes), each instrument's ``bow_length`` and the bow's
-``max_acceleration``. A user file given with ``--config`` is merged over them key by key, so
-it may hold only what it changes (including those three).
+instrument facts (:mod:`data_schemas.instruments`) already say: the bow lanes
+(``[dynamics]`` beta and velocity), each instrument's ``bow_length`` and the bow's
+``max_acceleration``. The bow force at each lane is the rules' own table in newtons per
+instrument and string (``[bow_force.<instrument>]``, :func:`bow_force`). A user file given
+with ``--config`` is merged over them key by key, so it may hold only what it changes
+(including those three).
 """
 
 from __future__ import annotations
@@ -48,10 +50,9 @@ def _shipped_config() -> dict[str, Any]:
 def _with_facts(config: dict[str, Any]) -> dict[str, Any]:
     """Add the defaults that the instrument facts hold (dynamics, bow length, acceleration)."""
     lanes = dynamics_table("bow_lanes")
-    config["dynamics"] = {"beta": list(lanes.beta), "velocity": list(lanes.velocity),
-                          "force": list(lanes.force)}
-    for name in INSTRUMENT_NAMES:
-        config["instruments"][name]["bow_length"] = instrument_facts(name).bow_length
+    config["dynamics"] = {"beta": list(lanes.beta), "velocity": list(lanes.velocity)}
+    config["instruments"] = {name: {"bow_length": instrument_facts(name).bow_length}
+                             for name in INSTRUMENT_NAMES}
     config["bow"]["max_acceleration"] = limits().max_bow_acceleration
     return config
 
@@ -74,6 +75,7 @@ def load_config(path: str | os.PathLike | None = None) -> dict[str, Any]:
         raise ParameterError(f"--config {path}: file not found") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ParameterError(f"--config {path}: not valid TOML ({exc})") from None
+    _refuse_multiples(user, str(path))
     _merge(config, user, str(path), "")
     validate_config(config, source=str(path))
     return config
@@ -82,6 +84,18 @@ def load_config(path: str | os.PathLike | None = None) -> dict[str, Any]:
 def _copy(config: dict[str, Any]) -> dict[str, Any]:
     return {k: _copy(v) if isinstance(v, dict) else (list(v) if isinstance(v, list) else v)
             for k, v in config.items()}
+
+
+def _refuse_multiples(user: dict[str, Any], source: str) -> None:
+    """Name the keys of the force table in multiples, which the newton table replaced."""
+    old = ["dynamics.force"] if "force" in user.get("dynamics", {}) else []
+    old += [f"instruments.{name}.force_scale" for name, inst in
+            user.get("instruments", {}).items() if isinstance(inst, dict) and
+            "force_scale" in inst]
+    if old:
+        raise ParameterError(f"{source}: {', '.join(old)}: the rules' bow forces are now "
+                             "newtons per string and dynamic level, [bow_force.<instrument>] "
+                             "<string> = [10 values, N] (see pipelines/perform/rules.toml)")
 
 
 def _merge(base: dict[str, Any], over: dict[str, Any], source: str, prefix: str) -> None:
@@ -106,8 +120,9 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
             "region_span": 1.0},
     "articulations": {"*": 10.0},
     "techniques": {"*": 10.0},
-    "instruments": {"force_scale": 10.0, "bow_length": 1.5},
-    "dynamics": {"beta": 0.5, "velocity": 5.0, "force": 20.0},
+    "instruments": {"bow_length": 1.5},
+    "dynamics": {"beta": 0.5, "velocity": 5.0},
+    "bow_force": {"*": 50.0},
     "skill": {"pitch_sigma": 12.0, "onset_sigma": 1.0},
     "vibrato": {"*": 20.0, "extent": 100.0, "onset_share": 1.0},
     "ornaments": {"trill_subdivision": 32.0, "trill_min_rate": 30.0, "trill_max_rate": 30.0,
@@ -167,17 +182,17 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
     ...
     data_schemas.errors.ParameterError: my.toml: frames.interval=1e+300 must be > 0 and <= 0.1
     """
-    for key in ("beta", "velocity", "force"):
+    for key in ("beta", "velocity"):
         _numbers(config["dynamics"][key], f"dynamics.{key}", _N_LEVELS, "> 0",
                  _upper("dynamics", key), source)
     if np.any(np.asarray(config["dynamics"]["beta"]) >= 0.5):
         raise ParameterError(f"{source}: dynamics.beta values must be < 0.5")
     for name, inst in config["instruments"].items():
-        for key in ("force_scale", "bow_length"):
-            value, upper = inst.get(key), _upper("instruments", key)
-            if not _is_number(value) or not 0 < value <= upper:
-                raise ParameterError(f"{source}: instruments.{name}.{key}={value!r} must be "
-                                     f"> 0 and <= {upper}")
+        value, upper = inst.get("bow_length"), _upper("instruments", "bow_length")
+        if not _is_number(value) or not 0 < value <= upper:
+            raise ParameterError(f"{source}: instruments.{name}.bow_length={value!r} must be "
+                                 f"> 0 and <= {upper}")
+    _validate_bow_force(config, source)
     _positive(config, "frames", "interval", source)
     for key in ("max_acceleration", "short_stroke_acceleration", "min_speed_scale",
                 "max_speed_scale", "retake_gap", "region_span"):
@@ -204,6 +219,19 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
     for key in ("pitch_sigma", "onset_sigma"):
         _numbers(config["skill"][key], f"skill.{key} (levels 0..3)", 4, ">= 0",
                  _upper("skill", key), source)
+
+
+def _validate_bow_force(config: dict[str, Any], source: str) -> None:
+    """``[bow_force.<instrument>]``: every string of every instrument, 10 newtons each."""
+    table = config.get("bow_force", {})
+    for name in INSTRUMENT_NAMES:
+        rows = table.get(name, {})
+        for string in instrument_facts(name).string_names:
+            if string not in rows:
+                raise ParameterError(f"{source}: bow_force.{name}.{string} is missing (one row "
+                                     "of 10 forces in N per string)")
+            _numbers(rows[string], f"bow_force.{name}.{string} (N, levels pppp..ffff)",
+                     _N_LEVELS, "> 0", _upper("bow_force", "*"), source)
 
 
 def _validate_loudness(config: dict[str, Any], source: str) -> None:
@@ -328,21 +356,21 @@ def beyond_lanes(level: np.ndarray) -> np.ndarray:
 
 
 def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.ndarray:
-    """Interpolate a per-dynamic table at fractional levels.
+    """Interpolate a bow lane (``beta`` or ``velocity``) at fractional dynamic levels.
 
     Parameters
     ----------
     config : dict
         Rules configuration.
     key : str
-        ``beta``, ``velocity`` (m/s) or ``force`` (multiples of the string's reference force).
+        ``beta`` or ``velocity`` (m/s).
     level : np.ndarray [shape=(n,)]
         Dynamic levels on the 0..9 scale; below 0 (softer than pppp, where evening out
-        loudness needs it) the pppp lane's beta with velocity and force both scaled down by
-        :data:`QUIET_DB` dB a level: the Helmholtz window's edges (F_min ~ v / beta^2,
-        F_max ~ v / beta) scale with the velocity, so the note stays as far inside it as at
-        pppp, and its amplitude (~ v / beta) falls by the same dB. Above 9 (louder than
-        ffff) the same law scales the ffff lane up.
+        loudness needs it) the pppp lane's beta with velocity and force (:func:`bow_force`)
+        both scaled down by :data:`QUIET_DB` dB a level: the Helmholtz window's edges
+        (F_min ~ v / beta^2, F_max ~ v / beta) scale with the velocity, so the note stays as
+        far inside it as at pppp, and its amplitude (~ v / beta) falls by the same dB. Above
+        9 (louder than ffff) the same law scales the ffff lane up.
 
     Returns
     -------
@@ -355,13 +383,51 @@ def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.nda
     [0.08, 0.0401]
     >>> float(dynamic_table(cfg, "beta", np.array([-2.0]))[0])
     0.2
-    >>> ratio = dynamic_table(cfg, "force", np.array([10.0, 9.0]))
+    """
+    if key not in ("beta", "velocity"):
+        raise ParameterError(f"dynamic_table: {key!r} is not a bow lane (beta or velocity; "
+                             "the force is bow_force(config, instrument, string, level))")
+    return _at_levels(config["dynamics"][key], level, scaled=key == "velocity")
+
+
+def bow_force(config: dict[str, Any], instrument: str, string: int,
+              level: np.ndarray) -> np.ndarray:
+    """The rules' bow force (N) on one string at fractional dynamic levels.
+
+    Parameters
+    ----------
+    config : dict
+        Rules configuration (its ``[bow_force.<instrument>]`` table).
+    instrument : str
+        ``violin``, ``viola`` or ``cello``.
+    string : int
+        String index, 0 = lowest.
+    level : np.ndarray [shape=(n,)]
+        Dynamic levels on the 0..9 scale; beyond pppp and ffff scaled like the velocity
+        (:func:`dynamic_table`).
+
+    Returns
+    -------
+    np.ndarray [shape=(n,)], N
+
+    Examples
+    --------
+    >>> cfg = load_config()
+    >>> float(bow_force(cfg, "violin", 1, np.array([5.0]))[0])     # D string, mf
+    2.145
+    >>> ratio = bow_force(cfg, "cello", 0, np.array([10.0, 9.0]))
     >>> round(float(ratio[0] / ratio[1]), 3)       # 3 dB a level above ffff
     1.413
     """
-    table = np.asarray(config["dynamics"][key], dtype=np.float64)
+    rows = config["bow_force"][instrument]
+    return _at_levels(rows[instrument_facts(instrument).string_names[string]], level, True)
+
+
+def _at_levels(table: list[float], level: np.ndarray, scaled: bool) -> np.ndarray:
+    """A per-level table at fractional levels; ``scaled``: by QUIET_DB dB a level beyond."""
+    table = np.asarray(table, dtype=np.float64)
     level = np.asarray(level, dtype=np.float64)
     out = np.interp(level, np.arange(table.size), table)
-    if key in ("velocity", "force"):
+    if scaled:
         out = out * 10.0 ** (QUIET_DB * beyond_lanes(level) / 20.0)
     return out

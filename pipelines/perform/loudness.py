@@ -1,8 +1,9 @@
 """Loudness like a player's: the same dynamic gives the same loudness on every note.
 
 A player evens out the body's resonances and the strings' differences by bowing, not with a
-fader. The instrument model's loudness at the rules' bow lanes (beta, velocity, force per
-dynamic level, ``data_schemas/config/instruments.toml``) is measured once per instrument,
+fader. The instrument model's loudness at the rules' bow lanes (beta and velocity per
+dynamic level, ``data_schemas/config/instruments.toml``, with the rules' newton table of bow
+forces, ``[bow_force]`` in ``rules.toml``) is measured once per instrument,
 string, finger position and level, both bow directions, and at mf 10 cents flat and sharp
 (``bench/calibrate_loudness.py`` writes ``loudness_calibration.parquet`` beside this
 module). :func:`even_out` then moves each bowed event along the bow lanes -- faster and
@@ -10,10 +11,11 @@ harder and nearer the bridge where the note sounds weak, slower, lighter and fur
 where it booms -- to the level whose calibrated loudness (at the note's own position, level
 and intonation, :class:`Calibration`) is the dynamic's target: ``[loudness] mf`` LUFS plus
 ``[loudness] level_db`` of the marked level, avoiding levels where the note spoke one bow
-direction only. The lanes stay in each string's playable window (force in multiples of the
-string's reference force), and so do their extensions below pppp (``below_pppp`` levels:
-pppp's beta, velocity and force scaled down together,
-:func:`pipelines.perform.config.dynamic_table`) and above ffff (``above_ffff``, the ffff
+direction only. The lanes stay in each string's playable window (the newton table follows
+the middle of each string's window), and so do their extensions below pppp (``below_pppp``
+levels: pppp's beta, velocity and force scaled down together,
+:func:`pipelines.perform.config.dynamic_table`, :func:`~pipelines.perform.config.bow_force`)
+and above ffff (``above_ffff``, the ffff
 lane scaled up for the weakest notes of a loud passage); where the lanes end or ``max_shift``
 levels do not reach the target, the event is played as near as possible and counted in a
 warning.
@@ -47,8 +49,8 @@ _SOURCES = (Path(__file__).resolve().parents[2] / "synth" / "config" / "strings.
 def calibration_key(config: dict[str, Any]) -> str:
     """Hash of what the calibration depends on: string physics, instrument facts, lanes.
 
-    The lanes are the dynamic table's beta, velocity and force and each instrument's
-    ``force_scale`` (the calibration plays the forces the rules play).
+    The lanes are the dynamic table's beta and velocity and the rules' newton table of bow
+    forces (the calibration plays the forces the rules play).
 
     Examples
     --------
@@ -59,10 +61,12 @@ def calibration_key(config: dict[str, Any]) -> str:
     h = hashlib.sha256()
     for path in _SOURCES:
         h.update(path.read_bytes())
-    for key in ("beta", "velocity", "force"):
+    for key in ("beta", "velocity"):
         h.update(np.asarray(config["dynamics"][key], dtype=np.float64).tobytes())
-    for name in sorted(config["instruments"]):
-        h.update(f"{name}={float(config['instruments'][name]['force_scale'])!r}".encode())
+    for name in sorted(config["bow_force"]):
+        for string in sorted(config["bow_force"][name]):
+            row = np.asarray(config["bow_force"][name][string], dtype=np.float64)
+            h.update(f"{name}.{string}=".encode() + row.tobytes())
     return h.hexdigest()[:16]
 
 

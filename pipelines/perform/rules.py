@@ -39,12 +39,13 @@ _MIN_DURATION = 0.005  # s
 
 
 def string_force_factors(instrument: str) -> np.ndarray:
-    """Reference force of each string (N): the unit of the dynamic force table.
+    """Reference force of each string (N): the middle of its Helmholtz window on the model.
 
     Each string's playable window differs (the cello C string needs ~10x the violin D's
-    force), so the table gives multiples of the instrument model's measured reference force
-    (middle of each string's Helmholtz range at beta 0.1 and 0.3 m/s,
-    ``synth/config/strings.toml``).
+    force); the reference force is the middle of each string's Helmholtz range at beta 0.1
+    and 0.3 m/s as measured on the instrument model (``synth/config/strings.toml``). The
+    rules play their own newton table (:func:`pipelines.perform.config.bow_force`); gesture
+    sampling moves sampled forces into each string's window with this.
 
     Returns
     -------
@@ -402,10 +403,7 @@ def perform_part(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str
         warnings.append(f"part {notes['part_name'].iloc[0]!r}: {int(strings['rolled'].sum())} "
                         "chord notes cannot be bowed at once and are rolled")
     strokes = bowing.plan(events, config, bow_length=inst_cfg["bow_length"], warnings=warnings)
-    actions = bowing.frames(events, strokes, config, force_scale=inst_cfg["force_scale"])
-    bowing_rows = ~actions["pluck"].to_numpy(bool)
-    factors = string_force_factors(name)[actions["string"].to_numpy(int)]
-    actions.loc[bowing_rows, "bow_force"] *= factors[bowing_rows]
+    actions = bowing.frames(events, strokes, config, instrument=name)
     # An accent on a cello C string can ask more than the actions table allows.
     limit = ACTIONS.column("bow_force").maximum
     actions["bow_force"] = actions["bow_force"].clip(upper=limit)
