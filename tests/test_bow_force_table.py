@@ -8,7 +8,9 @@ the key.
 
 from __future__ import annotations
 
+import importlib.util
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,6 +24,7 @@ from pipelines.perform.config import (
     load_config,
     validate_config,
 )
+from synth.playability_maps import PLAYER_FORCES
 
 
 @pytest.mark.parametrize("instrument", ["violin", "viola", "cello"])
@@ -71,3 +74,41 @@ def test_a_newton_table_missing_a_string_is_refused():
     del cfg["bow_force"]["viola"]["D"]
     with pytest.raises(ParameterError, match=re.escape("x.toml: bow_force.viola.D is missing")):
         validate_config(cfg, "x.toml")
+
+
+def test_the_players_table_plays_the_middle_of_players_forces():
+    """pipelines/perform/players_forces.toml: at mf each row is the middle of its players'
+    range (synth.playability_maps.PLAYER_FORCES at beta 0.1, 0.3 m/s) carried to the mf lane
+    by the window's law (v / 0.3 m/s) (0.1 / beta)^1.5, the same on every string."""
+    path = Path(__file__).resolve().parents[1] / "pipelines/perform/players_forces.toml"
+    cfg = load_config(path)
+    shipped = default_config()
+    lanes = cfg["dynamics"]
+    law = (np.asarray(lanes["velocity"]) / 0.3) * (0.1 / np.asarray(lanes["beta"])) ** 1.5
+    for instrument, (low, high) in PLAYER_FORCES.items():
+        for string in range(4):
+            row = bow_force(cfg, instrument, string, np.arange(10.0))
+            assert row == pytest.approx(np.sqrt(low * high) * law, rel=1e-3)
+            assert np.all(row < bow_force(shipped, instrument, string, np.arange(10.0)))
+
+
+def test_the_players_bench_reads_both_tables_and_sums_notes_by_hand():
+    """bench/players_forces.py: its mf forces are the tables' level-5 entries, and its
+    figures over two toy notes are the hop-weighted share and the class shares."""
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("players_forces",
+                                                  root / "bench" / "players_forces.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    mf = bench.mf_forces()
+    assert mf["shipped"]["violin"]["D"] == default_config()["bow_force"]["violin"]["D"][5]
+    assert mf["players"]["cello"]["C"] == pytest.approx(np.sqrt(0.5 * 5.0) * 1.1, rel=2e-3)
+    note = {"sustained_hops": 10, "helmholtz_share": 1.0, "reached_helmholtz": True,
+            "attack_ms": 20.0, "pitch_error_cents_median": 0.0, "level_error_db_median": 0.0,
+            "sustained_class_histogram": {"1": 0, "2": 0, "3": 10, "4": 0, "5": 0}}
+    other = {**note, "sustained_hops": 30, "helmholtz_share": 0.5, "attack_ms": 40.0,
+             "sustained_class_histogram": {"1": 0, "2": 0, "3": 15, "4": 0, "5": 15}}
+    fig = bench.figures([note, other])
+    assert fig["notes"] == 2 and fig["helmholtz_share"] == pytest.approx(25 / 40)
+    assert fig["sustained_class3_share"] == pytest.approx(25 / 40)
+    assert fig["sustained_class5_share"] == pytest.approx(15 / 40)
