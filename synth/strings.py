@@ -16,9 +16,13 @@ from dataclasses import dataclass, replace
 from functools import cache
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from data_schemas.errors import ParameterError, SchemaError
 from data_schemas.instruments import INSTRUMENT_NAMES, instrument_facts, limits
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: Keys of the instrument facts that a strings file must not repeat.
 _FACT_KEYS = {"name", "midi_pitch", "length", "bow_hair_length", "body_scale", "tuning_a4"}
@@ -222,5 +226,29 @@ def load_instrument(name: str, config: str | Path | None = None, *,
     return table[name]
 
 
+def reference_forces(name: str) -> np.ndarray:
+    """Reference force of each string of instrument ``name``: the middle of its window, N.
+
+    Each string's playable window differs (the cello C string needs about 10x the violin
+    D's force); its ``reference_force`` is the middle of its Helmholtz range at beta 0.1 and
+    0.3 m/s as measured on the instrument model (``synth/config/strings.toml``). Gesture
+    sampling moves sampled forces into each string's window with it; the rules play their
+    own newton table (:func:`pipelines.perform.config.bow_force`).
+
+    Returns
+    -------
+    np.ndarray [shape=(n_strings,)], N
+        Reference forces, lowest string first.
+
+    Examples
+    --------
+    >>> reference_forces("violin").tolist()
+    [1.5, 1.5, 0.541, 0.541]
+    """
+    import numpy as np  # here: the CLI's --help imports this module and stays light
+
+    return np.array([s.reference_force for s in load_instrument(name).strings])
+
+
 __all__ = ["INSTRUMENT_NAMES", "TUNINGS", "InstrumentConstants", "StringConstants",
-           "load_instrument", "tuned"]
+           "load_instrument", "reference_forces", "tuned"]

@@ -20,7 +20,7 @@ from pipelines.methods.playable import (
     window_middle,
 )
 from pipelines.perform.config import load_config
-from pipelines.perform.rules import string_force_factors
+from synth.strings import reference_forces
 
 REFS = np.array([1.5, 1.5, 0.5, 0.5])
 RATE = 240.0
@@ -54,7 +54,7 @@ def test_the_rules_newton_table_follows_the_window_middle(instrument):
     at the lanes' beta and velocity, times one factor per instrument (about 1 to 1.3)."""
     cfg = load_config()
     lanes = cfg["dynamics"]
-    refs = string_force_factors(instrument)
+    refs = reference_forces(instrument)
     for string, name in enumerate(instrument_facts(instrument).string_names):
         row = np.asarray(cfg["bow_force"][instrument][name])
         middle = window_middle(refs[string], np.asarray(lanes["velocity"]),

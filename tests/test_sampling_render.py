@@ -240,7 +240,7 @@ def test_the_loop_keeps_sampled_forces_in_the_playable_band(tiny_db, mf_models_d
     import synth.listening.controller as controller
     from pipelines.methods.playable import loop_range
     from pipelines.methods.sampling import open_database, render_sampling
-    from pipelines.perform.rules import string_force_factors
+    from synth.strings import reference_forces
 
     seen = {}
     real = controller.play_plan
@@ -257,7 +257,7 @@ def test_the_loop_keeps_sampled_forces_in_the_playable_band(tiny_db, mf_models_d
     lo, hi = seen["range"]
     plan = seen["plan"]
     want = loop_range(seen["planned"], plan.velocity, plan.beta,
-                      string_force_factors("violin"), 1.5)
+                      reference_forces("violin"), 1.5)
     np.testing.assert_allclose(lo, want[0])
     np.testing.assert_allclose(hi, want[1])
     force = seen["log"].force

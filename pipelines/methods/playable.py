@@ -209,14 +209,14 @@ def to_playable(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.DataFr
     Returns the transformed actions and a copy of ``choices`` with the ``force_factor`` of
     each note (all 1 when the band is 0: the transform is off).
     """
-    from pipelines.perform.rules import string_force_factors
+    from synth.strings import reference_forces
 
     band = playable_band(search_config)
     choices = choices.copy()
     if band == 0.0:
         choices["force_factor"] = 1.0
         return actions, choices
-    actions, factors = into_playable(actions, targets, string_force_factors(instrument), band)
+    actions, factors = into_playable(actions, targets, reference_forces(instrument), band)
     choices["force_factor"] = factors[choices["target_index"].to_numpy(int)]
     return actions, choices
 

@@ -392,11 +392,11 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
 def _loop_range(plan, sampled: np.ndarray, instrument: str,
                 band: float) -> tuple[np.ndarray, np.ndarray] | None:
     """The loop's per-hop force range inside the playable band (None: band 0, off)."""
-    from pipelines.perform.rules import string_force_factors
+    from synth.strings import reference_forces
 
     if band == 0.0:
         return None
-    return loop_range(sampled, plan.velocity, plan.beta, string_force_factors(instrument), band)
+    return loop_range(sampled, plan.velocity, plan.beta, reference_forces(instrument), band)
 
 
 def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrument: str,

@@ -138,7 +138,7 @@ def adapt_forces(actions: pd.DataFrame, instrument: str, search_config: dict[str
     pandas.DataFrame
         A copy with rescaled ``bow_force`` (pluck rows untouched).
     """
-    from pipelines.perform.rules import string_force_factors
+    from synth.strings import reference_forces
 
     recorded = float(search_config.get("render", {}).get("recorded_reference_force", 0.0))
     if recorded <= 0.0:
@@ -146,8 +146,8 @@ def adapt_forces(actions: pd.DataFrame, instrument: str, search_config: dict[str
     out = actions.copy()
     bowed = ~out["pluck"].to_numpy(bool)
     strings = out["string"].to_numpy(int)
-    played = recorded * string_force_factors(sampled_from) / string_force_factors("violin")
-    factor = string_force_factors(instrument)[strings] / played[strings]
+    played = recorded * reference_forces(sampled_from) / reference_forces("violin")
+    factor = reference_forces(instrument)[strings] / played[strings]
     out.loc[bowed, "bow_force"] = np.clip(out.loc[bowed, "bow_force"] * factor[bowed], 0.0,
                                           ACTIONS.column("bow_force").maximum)
     return out

@@ -38,25 +38,6 @@ _NOTE_NAMES = ("C", "C#", "D", "Eb", "E", "F", "F#", "G", "Ab", "A", "Bb", "B")
 _MIN_DURATION = 0.005  # s
 
 
-def string_force_factors(instrument: str) -> np.ndarray:
-    """Reference force of each string (N): the middle of its Helmholtz window on the model.
-
-    Each string's playable window differs (the cello C string needs ~10x the violin D's
-    force); the reference force is the middle of each string's Helmholtz range at beta 0.1
-    and 0.3 m/s as measured on the instrument model (``synth/config/strings.toml``). The
-    rules play their own newton table (:func:`pipelines.perform.config.bow_force`); gesture
-    sampling moves sampled forces into each string's window with this.
-
-    Returns
-    -------
-    np.ndarray [shape=(4,)], N
-        Reference forces, lowest string first.
-    """
-    from synth.strings import load_instrument
-
-    return np.array([s.reference_force for s in load_instrument(instrument).strings])
-
-
 def note_name(midi: float) -> str:
     """Scientific pitch name of a MIDI note, e.g. 69 -> ``A4``."""
     m = int(round(midi))

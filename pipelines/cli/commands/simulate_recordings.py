@@ -63,6 +63,6 @@ def string_forces(instrument: str):
     >>> string_forces("violin").tolist()
     [1.0, 1.0, 1.0, 1.0]
     """
-    from pipelines.perform.rules import string_force_factors
+    from synth.strings import reference_forces
 
-    return string_force_factors(instrument) / string_force_factors("violin")
+    return reference_forces(instrument) / reference_forces("violin")
