@@ -11,7 +11,11 @@ notes of all renders (Helmholtz share of sustained hops, notes that reach Helmho
 attack median and p90 in ms, class-3 and class-5 shares of sustained hops), and each table's
 mf force per string in N.
 
-    python bench/players_forces.py --json [--seeds 0,1] [--workers 2]
+    python bench/players_forces.py --json [--seeds 0,1] [--workers 2] [--tables shipped]
+                                   [--config RULES.toml]
+
+``--config``: rules settings read over each table (for instance ``[articulations]
+bite_force = 1.0``, the rules without the bite).
 
 About 3 minutes per seed on 2 cores.
 """
@@ -41,17 +45,28 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--seeds", default="0", help="comma-separated render seeds")
     p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--tables", default=",".join(TABLES),
+                   help="comma-separated tables to play (default: shipped,players)")
+    p.add_argument("--config", metavar="RULES.toml", default=None,
+                   help="rules settings read over each table (e.g. [articulations] bite_force)")
     return p.parse_args(argv)
+
+
+def table_config(table: str, extra: str | None) -> dict:
+    """The rules' configuration of ``table``, with the ``--config`` file read over it."""
+    from pipelines.perform.config import load_config
+
+    config = load_config(TABLES[table])
+    return config if extra is None else load_config(extra, base=config)
 
 
 def render_part(task: tuple) -> tuple[str, str, list[dict]]:
     """Rules render of one part with one table; its notes as the yardstick reads them."""
     from pipelines.methods.render import render_score
-    from pipelines.perform.config import load_config
     from pipelines.reports.compare import evaluate_output
 
-    table, path, part, first, last, seed = task
-    config = load_config(TABLES[table])
+    table, path, part, first, last, seed, extra = task
+    config = table_config(table, extra)
     out = render_score(str(path), method="rules", parts=part, start_measure=first,
                        end_measure=last, diagnostics=True, seed=seed, config=config)
     _, notes = evaluate_output(out, sample_rate=44100, config=config)
@@ -72,13 +87,11 @@ def figures(notes: list[dict]) -> dict:
     return out
 
 
-def mf_forces() -> dict:
+def mf_forces(tables: list[str], extra: str | None = None) -> dict:
     """Each table's force at mf (level 5) per instrument and string, N."""
-    from pipelines.perform.config import load_config
-
     return {table: {inst: {s: row[5] for s, row in rows.items()}
-                    for inst, rows in load_config(path)["bow_force"].items()}
-            for table, path in TABLES.items()}
+                    for inst, rows in table_config(table, extra)["bow_force"].items()}
+            for table in tables}
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -87,17 +100,24 @@ def main(argv: list[str] | None = None) -> dict:
     args = parse_args(argv)
     start = time.perf_counter()
     seeds = [int(s) for s in args.seeds.split(",")]
-    todo = [(table, path, part, a, b, seed) for table in TABLES for rel, a, b in MUSIC
-            if (path := _score_path(rel)) is not None for part in range(4) for seed in seeds]
+    tables = args.tables.split(",")
+    unknown = sorted(set(tables) - set(TABLES))
+    if unknown:
+        raise SystemExit(f"--tables: unknown {', '.join(unknown)} (known: {', '.join(TABLES)})")
+    table_config(tables[0], args.config)  # a bad --config stops here, naming its key
+    todo = [(table, path, part, a, b, seed, args.config) for table in tables
+            for rel, a, b in MUSIC if (path := _score_path(rel)) is not None
+            for part in range(4) for seed in seeds]
     by: dict[tuple[str, str], list[dict]] = {}
     with ProcessPoolExecutor(max(args.workers, 1)) as pool:
         for table, instrument, notes in pool.map(render_part, todo):
             by.setdefault((table, instrument), []).extend(notes)
     report = {"benchmark": "players_forces", "seeds": seeds,
-              "excerpts": len(todo) // (4 * len(TABLES) * len(seeds)),
+              "excerpts": len(todo) // (4 * len(tables) * len(seeds)), "config": args.config,
               "figures": {table: {inst: figures(notes) for (t, inst), notes in by.items()
-                                  if t == table} for table in TABLES},
-              "mf_force_N": mf_forces(), "seconds": round(time.perf_counter() - start, 1)}
+                                  if t == table} for table in tables},
+              "mf_force_N": mf_forces(tables, args.config),
+              "seconds": round(time.perf_counter() - start, 1)}
     if args.json:
         print(json.dumps(report))
     else:

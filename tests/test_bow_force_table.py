@@ -100,7 +100,7 @@ def test_the_players_bench_reads_both_tables_and_sums_notes_by_hand():
                                                   root / "bench" / "players_forces.py")
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
-    mf = bench.mf_forces()
+    mf = bench.mf_forces(["shipped", "players"])
     assert mf["shipped"]["violin"]["D"] == default_config()["bow_force"]["violin"]["D"][5]
     assert mf["players"]["cello"]["C"] == pytest.approx(np.sqrt(0.5 * 5.0) * 1.1, rel=2e-3)
     note = {"sustained_hops": 10, "helmholtz_share": 1.0, "reached_helmholtz": True,
@@ -112,3 +112,20 @@ def test_the_players_bench_reads_both_tables_and_sums_notes_by_hand():
     assert fig["notes"] == 2 and fig["helmholtz_share"] == pytest.approx(25 / 40)
     assert fig["sustained_class3_share"] == pytest.approx(25 / 40)
     assert fig["sustained_class5_share"] == pytest.approx(15 / 40)
+
+
+def test_a_settings_file_reads_over_a_table_without_touching_it(tmp_path):
+    """``load_config(path, base=...)`` (the bench's ``--config`` over each table): the
+    file's keys replace the base's, the rest of the base stays, the base is not changed."""
+    root = Path(__file__).resolve().parents[1]
+    players = load_config(root / "pipelines/perform/players_forces.toml")
+    before = players["bow_force"]["viola"]["C"][:]
+    extra = tmp_path / "no-bite.toml"
+    extra.write_text("[articulations]\nbite_force = 1.0\n[bow_force.viola]\n"
+                     "C = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]\n")
+    both = load_config(extra, base=players)
+    assert both["articulations"]["bite_force"] == 1.0
+    assert both["bow_force"]["viola"]["C"][9] == 10
+    assert both["bow_force"]["cello"] == players["bow_force"]["cello"]
+    assert players["bow_force"]["viola"]["C"] == before
+    assert players["articulations"]["bite_force"] == default_config()["articulations"]["bite_force"]

@@ -19,6 +19,8 @@ CFG["vibrato"]["enabled"] = False
 CFG["intonation"].update(sigma=0.0, semitone_step=0.0, by_ear=False)
 # ... and the lanes as written (the loudness evening-out moves them: tests/test_loudness.py).
 CFG["loudness"]["enabled"] = False
+# ... and without the bite at each stroke's start (tests/test_bite.py).
+CFG["articulations"]["bite_force"] = 1.0
 L = CFG["instruments"]["violin"]["bow_length"]
 FERMATA_SHIFT = 2.0 * (CFG["articulations"]["fermata_stretch"] - 1.0)
 

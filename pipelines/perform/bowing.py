@@ -24,6 +24,7 @@ from pipelines.perform.bow_speed import limit_acceleration, stroke_acceleration
 from pipelines.perform.config import bow_force, dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
+from pipelines.perform.note_shape import dynamic_at, note_beta, note_force
 from pipelines.perform.ornaments import ornament_cents
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
@@ -65,13 +66,6 @@ class Stroke:
         return float(self.t[-1])
 
 
-def _dynamic_at(e: Event, t: np.ndarray) -> np.ndarray:
-    if e.dynamic_next is None or not np.isfinite(e.next_t0):
-        return np.full(t.shape, e.dynamic)
-    frac = np.clip((t - e.t0) / max(e.next_t0 - e.t0, 1e-6), 0.0, 1.0)
-    return e.dynamic + (e.dynamic_next - e.dynamic) * frac
-
-
 def _stroke_grid(events: list[Event], idx: list[int], dt: float) -> np.ndarray:
     t0, t1 = events[idx[0]].t0, events[idx[-1]].played_end
     points = [np.arange(t0, t1, dt), [t1]]
@@ -89,7 +83,7 @@ def _target_speed(events: list[Event], idx: list[int], t: np.ndarray,
     for j, k in enumerate(idx):
         e = events[k]
         mask = (which == j) & (t < e.played_end)
-        target[mask] = dynamic_table(config, "velocity", _dynamic_at(e, t[mask]))
+        target[mask] = dynamic_table(config, "velocity", dynamic_at(e, t[mask]))
     target[0] = 0.0
     target[-1] = 0.0
     return target
@@ -246,47 +240,6 @@ def _retake(prev: Stroke, s: Stroke, first: Event, gap: float) -> bool:
     return (first.t0 - prev.stop) >= gap or prev.direction == s.direction
 
 
-def _force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float, instrument: str,
-           string: int) -> np.ndarray:
-    """Bow force (N) of event ``e`` on ``string`` at times ``t``.
-
-    The newton table's force at the event's dynamic, times ``scale`` and the articulation's
-    shape.
-    """
-    art = config["articulations"]
-    tech = config["techniques"]
-    force = bow_force(config, instrument, string, _dynamic_at(e, t)) * scale
-    if e.technique == "col_legno":
-        force = force * tech["col_legno_force"]
-    if len(e.strings) > 1:
-        force = force * art["double_stop_force"]
-    if e.node:  # a harmonic, natural or artificial
-        force = force * config["harmonics"]["force"]
-    if e.accent != 1.0:
-        decay = np.clip(1.0 - (t - e.t0) / art["accent_time"], 0.0, 1.0)
-        force = force * (1.0 + (e.accent - 1.0) * decay)
-    lt = art["lighten_time"]
-    tail = np.clip((np.minimum(t, e.played_end) - (e.played_end - lt)) / lt, 0.0, 1.0)
-    if e.breath:
-        force = force * (1.0 - (1.0 - art["breath_force"]) * tail)
-    elif e.lighten:
-        force = force * (1.0 - (1.0 - art["lighten_force"]) * tail)
-    return force
-
-
-def _beta(e: Event, t: np.ndarray, config: dict[str, Any], scale: float = 1.0) -> np.ndarray:
-    beta = dynamic_table(config, "beta", _dynamic_at(e, t)) * scale
-    if e.technique == "sul_ponticello":
-        beta = beta * config["techniques"]["sul_ponticello_beta"]
-    elif e.technique == "sul_tasto":
-        beta = beta * config["techniques"]["sul_tasto_beta"]
-    if e.node:  # a harmonic: the bow's place on the sounding segment (1/n of the vibrating
-        # length: the whole string for a natural one, the stopped length for an artificial)
-        harm = config["harmonics"]
-        beta = np.maximum(beta * harm["segment_beta"] / e.node, harm["min_beta"])
-    return np.clip(beta, 0.02, 0.45)
-
-
 def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *,
            instrument: str) -> pd.DataFrame:
     """Render planned strokes (and plucks) as control frames of the actions table.
@@ -321,9 +274,11 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                 t = np.append(t, seg_end - _TICK)
             speed = np.interp(t, s.t, s.speed)
             pos = np.interp(t, s.t, s.position)
-            force = {string: _force(e, t, config, s.force_scale, instrument, string)
+            catches = e.ornament is None and not e.grace and (  # (ornaments: light bow)
+                j == 0 or set(e.strings) != set(events[s.events[j - 1]].strings))
+            force = {string: note_force(e, t, config, s.force_scale, instrument, string, catches)
                      for string in {*e.strings, *(r[0] for r in e.roll)}}
-            beta = _beta(e, t, config, s.beta_scale)
+            beta = note_beta(e, t, config, s.beta_scale)
             n_roll = len(e.roll)
             sustain_from = e.t0 + n_roll * roll_time
             for j_roll, (string, semis) in enumerate(e.roll):
@@ -426,7 +381,7 @@ def _after_stroke(events: list[Event], k: int, t: np.ndarray, force: dict[int, n
 
 
 def _pluck(e: Event, config: dict[str, Any], instrument: str) -> list[dict[str, np.ndarray]]:
-    beta = float(_beta(e, np.array([e.t0]), config)[0])
+    beta = float(note_beta(e, np.array([e.t0]), config)[0])
     out = []
     members = [*e.roll, *zip(e.strings, e.semitones, strict=True)]
     for j, (string, semis) in enumerate(members):

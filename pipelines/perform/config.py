@@ -57,15 +57,19 @@ def _with_facts(config: dict[str, Any]) -> dict[str, Any]:
     return config
 
 
-def load_config(path: str | os.PathLike | None = None) -> dict[str, Any]:
-    """Return the defaults merged with the TOML file at ``path`` (if any), validated.
+def load_config(path: str | os.PathLike | None = None, *,
+                base: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Return the defaults (or a copy of ``base``) merged with the TOML file at ``path``.
+
+    ``base``: a configuration already loaded (another file's), for files read in layers.
+    The result is validated.
 
     Raises
     ------
     ParameterError
         The file is missing, not TOML, or a value is out of range (names file and key).
     """
-    config = default_config()
+    config = default_config() if base is None else _copy(base)
     if path is None:
         return config
     path = Path(path)
@@ -118,7 +122,7 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
     "bow": {"max_acceleration": 100.0, "short_stroke_acceleration": 100.0,
             "min_speed_scale": 1.0, "max_speed_scale": 10.0, "retake_gap": 10.0,
             "region_span": 1.0},
-    "articulations": {"*": 10.0},
+    "articulations": {"*": 10.0, "bite_force": 4.0, "bite_hold": 1.0, "bite_time": 1.0},
     "techniques": {"*": 10.0},
     "instruments": {"bow_length": 1.5},
     "dynamics": {"beta": 0.5, "velocity": 5.0},

@@ -1,0 +1,103 @@
+"""The shape of one bowed note: its bow force (N) and contact point (beta) over time.
+
+The force comes from the rules' newton table at the note's dynamic, shaped by the bite at a
+stroke's start or a change of string (:func:`bite`), the technique, double stops,
+harmonics, accents and the lightening before a break; beta from the dynamic's lane, the
+technique and a harmonic's segment. :mod:`pipelines.perform.bowing` writes them into the
+actions table.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from pipelines.perform.config import bow_force, dynamic_table
+from pipelines.perform.events import Event
+
+
+def dynamic_at(e: Event, t: np.ndarray) -> np.ndarray:
+    """Dynamic level (0..9) of event ``e`` at times ``t`` (s): towards the next marking."""
+    if e.dynamic_next is None or not np.isfinite(e.next_t0):
+        return np.full(t.shape, e.dynamic)
+    frac = np.clip((t - e.t0) / max(e.next_t0 - e.t0, 1e-6), 0.0, 1.0)
+    return e.dynamic + (e.dynamic_next - e.dynamic) * frac
+
+
+def bite(t: np.ndarray, t0: float, config: dict[str, Any]) -> np.ndarray:
+    """The bite's factor on the bow force at times ``t`` of a note that catches the string.
+
+    ``bite_force`` from ``t0`` for ``bite_hold`` s, then an exponential release to 1 with
+    time constant ``bite_time`` s (``[articulations]`` of the rules' configuration); 1
+    before ``t0``.
+
+    Parameters
+    ----------
+    t : np.ndarray, s
+        Times of the note's frames.
+    t0 : float, s
+        The note's start: a stroke's first note or a change of string.
+    config : dict
+        Rules configuration.
+
+    Returns
+    -------
+    np.ndarray [shape=t.shape]
+        Factor on the note's force (dimensionless).
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import load_config
+    >>> config = load_config()
+    >>> bite(np.array([0.0, 0.1, 0.15]), 0.0, config).round(3).tolist()
+    [1.3, 1.3, 1.11]
+    """
+    art = config["articulations"]
+    late = np.clip(np.asarray(t, np.float64) - t0 - art["bite_hold"], 0.0, None)
+    held = np.where(np.asarray(t) >= t0, np.exp(-late / art["bite_time"]), 0.0)
+    return 1.0 + (art["bite_force"] - 1.0) * held
+
+
+def note_force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float, instrument: str,
+               string: int, catches: bool = False) -> np.ndarray:
+    """Bow force (N) of event ``e`` on ``string`` at times ``t``.
+
+    The newton table's force at the event's dynamic, times ``scale`` and the articulation's
+    shape; ``catches``: the note starts a stroke or a string (:func:`bite`).
+    """
+    art = config["articulations"]
+    tech = config["techniques"]
+    force = bow_force(config, instrument, string, dynamic_at(e, t)) * scale
+    if catches and art["bite_force"] != 1.0:
+        force = force * bite(t, e.t0, config)
+    if e.technique == "col_legno":
+        force = force * tech["col_legno_force"]
+    if len(e.strings) > 1:
+        force = force * art["double_stop_force"]
+    if e.node:  # a harmonic, natural or artificial
+        force = force * config["harmonics"]["force"]
+    if e.accent != 1.0:
+        decay = np.clip(1.0 - (t - e.t0) / art["accent_time"], 0.0, 1.0)
+        force = force * (1.0 + (e.accent - 1.0) * decay)
+    lt = art["lighten_time"]
+    tail = np.clip((np.minimum(t, e.played_end) - (e.played_end - lt)) / lt, 0.0, 1.0)
+    if e.breath:
+        force = force * (1.0 - (1.0 - art["breath_force"]) * tail)
+    elif e.lighten:
+        force = force * (1.0 - (1.0 - art["lighten_force"]) * tail)
+    return force
+
+
+def note_beta(e: Event, t: np.ndarray, config: dict[str, Any], scale: float = 1.0) -> np.ndarray:
+    """Contact point beta (bow-bridge distance / string length) of ``e`` at times ``t`` (s)."""
+    beta = dynamic_table(config, "beta", dynamic_at(e, t)) * scale
+    if e.technique == "sul_ponticello":
+        beta = beta * config["techniques"]["sul_ponticello_beta"]
+    elif e.technique == "sul_tasto":
+        beta = beta * config["techniques"]["sul_tasto_beta"]
+    if e.node:  # a harmonic: the bow's place on the sounding segment (1/n of the vibrating
+        # length: the whole string for a natural one, the stopped length for an artificial)
+        harm = config["harmonics"]
+        beta = np.maximum(beta * harm["segment_beta"] / e.node, harm["min_beta"])
+    return np.clip(beta, 0.02, 0.45)
