@@ -4,7 +4,8 @@ Truths: the envelope written out here with ``math.exp`` (``bite_force`` held ``b
 then an exponential release with time constant ``bite_time`` s); and, on a short violin
 score played with and without the bite, which notes catch the string: the first note of a
 stroke and a slurred note on a new string do, a slurred note on the same string and an
-ornamented note do not. Bad settings are refused naming the key.
+ornamented note do not; in slurred double stops only the string crossed to is caught, not
+the one sounding on. Bad settings are refused naming the key.
 """
 
 from __future__ import annotations
@@ -120,3 +121,44 @@ def test_bad_bite_settings_are_refused_naming_the_key(tmp_path, key, value, mess
     user.write_text(f"[articulations]\n{key} = {value}\n")
     with pytest.raises(ParameterError, match=re.escape(message)):
         load_config(user)
+
+
+@pytest.fixture(scope="module")
+def double_stops(tmp_path_factory):
+    """D4+A4 slurred to A4+E5: the A string sounds on, the E string is crossed to."""
+    from music21 import chord, dynamics, instrument, meter, stream, tempo
+    from music21.spanner import Slur
+
+    from pipelines.score.dispatch import read_score
+
+    part = stream.Part(id="P1")
+    part.insert(0, instrument.Violin())
+    m = stream.Measure(number=1)
+    m.insert(0, meter.TimeSignature("2/4"))
+    m.insert(0, tempo.MetronomeMark(number=60, referent=1.0))
+    m.insert(0, dynamics.Dynamic("mf"))
+    first, second = chord.Chord(["D4", "A4"], quarterLength=1.0), chord.Chord(["A4", "E5"])
+    m.append([first, second])
+    part.append(m)
+    part.insert(0, Slur(first, second))
+    path = tmp_path_factory.mktemp("bite") / "double.musicxml"
+    stream.Score([part]).write("musicxml", path)
+    notes = read_score(path)
+    off = copy.deepcopy(CFG)
+    off["articulations"]["bite_force"] = 1.0
+    return perform_part(notes, CFG), perform_part(notes, off)
+
+
+def test_a_string_sounding_on_in_a_slur_is_not_caught_again(double_stops):
+    on, off = double_stops
+    a, b = on.actions, off.actions
+    assert np.array_equal(a["time"], b["time"]) and np.array_equal(a["string"], b["string"])
+    second = (a["time"] > 1.0) & (a["time"] < 1.3) & (b["bow_force"] > 0)
+    ratio = (a["bow_force"] / b["bow_force"].where(second, 1.0))[second]
+    by_string = ratio.groupby(a["string"][second]).max()
+    assert set(by_string.index) == {2, 3}  # A and E
+    assert by_string[2] == pytest.approx(1.0, rel=1e-6)
+    assert by_string[3] == pytest.approx(CFG["articulations"]["bite_force"], rel=1e-6)
+    first = (a["time"] > 0.0) & (a["time"] < 0.1) & (b["bow_force"] > 0)
+    ratio = (a["bow_force"] / b["bow_force"].where(first, 1.0))[first]
+    assert ratio.to_numpy() == pytest.approx(CFG["articulations"]["bite_force"], rel=1e-6)

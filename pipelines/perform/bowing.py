@@ -274,9 +274,12 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                 t = np.append(t, seg_end - _TICK)
             speed = np.interp(t, s.t, s.speed)
             pos = np.interp(t, s.t, s.position)
-            catches = e.ornament is None and not e.grace and (  # (ornaments: light bow)
-                j == 0 or set(e.strings) != set(events[s.events[j - 1]].strings))
-            force = {string: note_force(e, t, config, s.force_scale, instrument, string, catches)
+            # The bow catches each string the stroke starts on or crosses to (not one
+            # already sounding in a slur, nor under grace or ornament notes: a light bow).
+            sounding = set(events[s.events[j - 1]].strings) if j else set()
+            plain = e.ornament is None and not e.grace
+            force = {string: note_force(e, t, config, s.force_scale, instrument, string,
+                                        plain and string not in sounding)
                      for string in {*e.strings, *(r[0] for r in e.roll)}}
             beta = note_beta(e, t, config, s.beta_scale)
             n_roll = len(e.roll)
