@@ -43,20 +43,40 @@ def test_the_envelope_is_held_then_released_exponentially(force, hold, time, t0,
     assert bite(np.array(t), t0, cfg) == pytest.approx(want, rel=1e-12, abs=1e-12)
 
 
-@pytest.fixture(scope="module")
-def played(tmp_path_factory):
-    """A4 | A4-B4 slurred (one string) | D4-E5 slurred (a string crossing) | E5 with a turn."""
-    from music21 import dynamics, expressions, instrument, meter, note, stream, tempo
-    from music21.spanner import Slur
-
-    from pipelines.score.dispatch import read_score
+def _violin_part(meter_text: str):
+    """A violin part and its first measure (``meter_text``, quarter = 60, mf)."""
+    from music21 import dynamics, instrument, meter, stream, tempo
 
     part = stream.Part(id="P1")
     part.insert(0, instrument.Violin())
-    first, second = stream.Measure(number=1), stream.Measure(number=2)
-    first.insert(0, meter.TimeSignature("4/4"))
+    first = stream.Measure(number=1)
+    first.insert(0, meter.TimeSignature(meter_text))
     first.insert(0, tempo.MetronomeMark(number=60, referent=1.0))
     first.insert(0, dynamics.Dynamic("mf"))
+    return part, first
+
+
+def _with_and_without(part, path):
+    """``part`` written to ``path`` and played by the rules with and without the bite."""
+    from music21 import stream
+
+    from pipelines.score.dispatch import read_score
+
+    stream.Score([part]).write("musicxml", path)
+    notes = read_score(path)
+    off = copy.deepcopy(CFG)
+    off["articulations"]["bite_force"] = 1.0
+    return perform_part(notes, CFG), perform_part(notes, off)
+
+
+@pytest.fixture(scope="module")
+def played(tmp_path_factory):
+    """A4 | A4-B4 slurred (one string) | D4-E5 slurred (a string crossing) | E5 with a turn."""
+    from music21 import expressions, note, stream
+    from music21.spanner import Slur
+
+    part, first = _violin_part("4/4")
+    second = stream.Measure(number=2)
     ns = [note.Note(p, quarterLength=1.0) for p in ("A4", "A4", "B4", "D4", "E5")]
     turned = note.Note("E5", quarterLength=2.0)
     turned.expressions.append(expressions.Turn())
@@ -65,12 +85,7 @@ def played(tmp_path_factory):
     part.append([first, second])
     part.insert(0, Slur(ns[1], ns[2]))
     part.insert(0, Slur(ns[3], ns[4]))
-    path = tmp_path_factory.mktemp("bite") / "bite.musicxml"
-    stream.Score([part]).write("musicxml", path)
-    notes = read_score(path)
-    off = copy.deepcopy(CFG)
-    off["articulations"]["bite_force"] = 1.0
-    return perform_part(notes, CFG), perform_part(notes, off)
+    return _with_and_without(part, tmp_path_factory.mktemp("bite") / "bite.musicxml")
 
 
 def _ratios(played, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -126,27 +141,15 @@ def test_bad_bite_settings_are_refused_naming_the_key(tmp_path, key, value, mess
 @pytest.fixture(scope="module")
 def double_stops(tmp_path_factory):
     """D4+A4 slurred to A4+E5: the A string sounds on, the E string is crossed to."""
-    from music21 import chord, dynamics, instrument, meter, stream, tempo
+    from music21 import chord
     from music21.spanner import Slur
 
-    from pipelines.score.dispatch import read_score
-
-    part = stream.Part(id="P1")
-    part.insert(0, instrument.Violin())
-    m = stream.Measure(number=1)
-    m.insert(0, meter.TimeSignature("2/4"))
-    m.insert(0, tempo.MetronomeMark(number=60, referent=1.0))
-    m.insert(0, dynamics.Dynamic("mf"))
+    part, m = _violin_part("2/4")
     first, second = chord.Chord(["D4", "A4"], quarterLength=1.0), chord.Chord(["A4", "E5"])
     m.append([first, second])
     part.append(m)
     part.insert(0, Slur(first, second))
-    path = tmp_path_factory.mktemp("bite") / "double.musicxml"
-    stream.Score([part]).write("musicxml", path)
-    notes = read_score(path)
-    off = copy.deepcopy(CFG)
-    off["articulations"]["bite_force"] = 1.0
-    return perform_part(notes, CFG), perform_part(notes, off)
+    return _with_and_without(part, tmp_path_factory.mktemp("bite") / "double.musicxml")
 
 
 def test_a_string_sounding_on_in_a_slur_is_not_caught_again(double_stops):
