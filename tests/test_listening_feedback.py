@@ -85,3 +85,35 @@ def test_feedback_starts_each_note_at_the_rules_force(feedback):
     t0 = played["time"].iloc[0]
     planned = np.interp(t0, rules["time"], rules["bow_force"])
     assert abs(played["bow_force"].iloc[0] / planned - 1.0) < 0.05
+
+
+def test_feedback_rehearses_like_the_rules(models_dir):
+    """With ``[loudness] rehearsals``, feedback keeps the take whose notes came nearest
+    their loudness goals: never further than its first take (the render without
+    rehearsal), and the actions and diagnostics returned are the kept take's."""
+    from pipelines.methods.feedback import hop_plan
+    from pipelines.methods.rehearsal import note_errors, try_score
+
+    loud = load_config()
+    once = load_config()
+    once["loudness"]["rehearsals"] = 0
+    notes = d_string_notes()
+    first = render_feedback(notes, once, models_dir=models_dir, instrument="violin", seed=0)
+    kept = render_feedback(notes, loud, models_dir=models_dir, instrument="violin", seed=0)
+
+    def miss(render):
+        audio, _, _, perf = render
+        return float(try_score(note_errors(audio, 44100, perf)[None, :])[0])
+
+    assert np.isfinite(miss(first)) and miss(kept) <= miss(first)
+    audio, actions, diagnostics, perf = kept
+    # The actions follow the kept take's plan: its bow lanes' velocity, within the jitter.
+    plan, _ = hop_plan(perf, loud, "violin")
+    bowed = actions[actions["bow_force"] > 0]
+    hop = np.rint(bowed["time"].to_numpy() * 44100 / 256).astype(int) - 1
+    planned = np.abs(plan.velocity[hop, 1])
+    moving = planned > 0.05
+    played = bowed["bow_velocity"].abs().to_numpy()[moving]
+    assert np.median(np.abs(played / planned[moving] - 1.0)) < 0.02
+    # ... and the diagnostics are the audio's: the slip record reads the notes as played.
+    assert evaluate(audio, actions, diagnostics=diagnostics)["piece"]["notes"] == len(notes)

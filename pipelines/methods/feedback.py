@@ -9,6 +9,11 @@ starts from the rules' own planned force (:func:`planned_forces`: from the note'
 string, beta, bow velocity, length and attack envelope, which plays well open loop) and the
 controller owns a correction factor that starts at 1 on every stroke. The returned actions
 table records what the controller actually did (one frame per hop per string).
+
+Like the rules (:func:`pipelines.methods.rehearsal.rehearse`, ``[loudness] rehearsals``),
+feedback rehearses: it plays the part under the controller, hears each note's loudness,
+moves the plan's levels by what they missed and plays again, keeping the take whose notes
+missed least. What it hears is its own audio; what it moves is its own plan.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from data_schemas.actions import validate_actions
 from data_schemas.diagnostics import CONTACT_DIAGNOSTICS
 from data_schemas.errors import ParameterError
 from data_schemas.instruments import finger_ratio, instrument_facts, limits, semitones_of
+from pipelines.methods.rehearsal import rehearse
 from pipelines.perform.config import dynamic_table
 from pipelines.perform.events import Performance
 from pipelines.perform.rules import fermata_warp, perform_part
@@ -183,6 +189,11 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
                     ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame | None, Performance]:
     """Play one part with the rules' bowing and the listening controller's force.
 
+    With ``[loudness] rehearsals`` above 0 (and loudness evening-out enabled) the part is
+    played up to ``rehearsals + 1`` times, each take under the controller from the same
+    seed, and the take whose notes came nearest their loudness goals is returned
+    (:func:`pipelines.methods.rehearsal.rehearse`).
+
     Parameters
     ----------
     notes : pandas.DataFrame
@@ -224,11 +235,9 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
         Contact diagnostics per hop per string (table ``CONTACT_DIAGNOSTICS``), None when
         not recorded.
     performance : Performance
-        The rules' plan (events, warnings) the controller followed.
+        The rules' plan (events, warnings) the controller followed in the take returned.
     """
-    from synth.engines import get_engine
     from synth.listening.classifier import ModelError, load_models
-    from synth.listening.controller import play_plan
 
     if sample_rate not in (44100, 48000):
         raise ParameterError(f"sample_rate={sample_rate}: feedback control needs 44100 or "
@@ -237,22 +246,69 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
     rng = rng if rng is not None else np.random.default_rng(seed)
     if warp is None:
         warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
-    perf = perform_part(notes, config, instrument=name, skill=skill, rng=rng, warp=warp,
-                        transpose_octaves=transpose_octaves, phrasing=phrasing)
-    plan, span = hop_plan(perf, config, name, sample_rate=sample_rate)
     try:
         models = load_models(models_dir, name)
     except ModelError as exc:
         raise ModelError(f"feedback needs {name} models for this {name} part: {exc}") from None
-    inst = get_engine(engine, name, sample_rate=sample_rate, seed=seed)
+    def plan_part(shift: np.ndarray | None, **options: Any) -> Performance:
+        return perform_part(notes, config, instrument=name, skill=skill, warp=warp,
+                            transpose_octaves=transpose_octaves, phrasing=phrasing,
+                            level_shift=shift, **options)
+
+    return _rehearsed(plan_part, rng, config, name, models, engine=engine, seed=seed,
+                      sample_rate=sample_rate, settings=settings or FEEDBACK_SETTINGS,
+                      diagnostics=diagnostics)
+
+
+def _rehearsed(plan_part, rng: np.random.Generator, config: dict[str, Any], instrument: str,
+               models: dict, **take: Any,
+               ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame | None, Performance]:
+    """Rehearse a part under the controller; the kept take's audio, actions, diagnostics, plan.
+
+    ``plan_part(level_shift, rng=...)`` plans the part (every try from the same ``rng``
+    state, so each plays the same skill jitter); ``take`` goes to :func:`_play_controlled`.
+    """
+    state = rng.bit_generator.state
+
+    def play(shift: np.ndarray | None) -> Performance:
+        rng.bit_generator.state = state
+        return plan_part(shift, rng=rng)
+
+    takes: list[tuple[Performance, pd.DataFrame, pd.DataFrame | None]] = []
+
+    def listen(perf: Performance) -> np.ndarray:
+        audio, actions, table = _play_controlled(perf, config, instrument, models, **take)
+        takes.append((perf, actions, table))
+        return audio
+
+    perf, audio = rehearse(play, listen, config, take["sample_rate"])
+    _, actions, table = next(t for t in takes if t[0] is perf)
+    return audio, actions, table, perf
+
+
+def _play_controlled(perf: Performance, config: dict[str, Any], instrument: str,
+                     models: dict, *, engine: str, seed: int, sample_rate: int,
+                     settings: ControllerSettings, diagnostics: bool,
+                     ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame | None]:
+    """Play the rules' plan ``perf`` with the controller owning the force (one take).
+
+    Returns the take's audio (float32, with :data:`TAIL` of ring-out), its actions table
+    and its contact diagnostics (None unless ``diagnostics``); the engine and the
+    controller's jitter start from ``seed`` on every take.
+    """
+    from synth.engines import get_engine
+    from synth.listening.controller import play_plan
+
+    plan, span = hop_plan(perf, config, instrument, sample_rate=sample_rate)
+    inst = get_engine(engine, instrument, sample_rate=sample_rate, seed=seed)
     log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 1]),
-                    settings=settings or FEEDBACK_SETTINGS, record_diagnostics=diagnostics,
+                    settings=settings, record_diagnostics=diagnostics,
                     planned_force=planned_forces(perf, plan, sample_rate))
     tail = inst.process(int(TAIL * sample_rate), {}, diagnostics=False).audio
     audio = np.concatenate([log.audio, tail]).astype(np.float32)
     actions = played_actions(perf, plan, span, log, sample_rate=sample_rate)
     table = diagnostics_table(log, sample_rate) if diagnostics else None
-    return audio, actions, table, perf
+    return audio, actions, table
 
 
 def planned_forces(perf: Performance, plan: HopPlan, sample_rate: int) -> np.ndarray:
