@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -250,6 +251,7 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
         models = load_models(models_dir, name)
     except ModelError as exc:
         raise ModelError(f"feedback needs {name} models for this {name} part: {exc}") from None
+
     def plan_part(shift: np.ndarray | None, **options: Any) -> Performance:
         return perform_part(notes, config, instrument=name, skill=skill, warp=warp,
                             transpose_octaves=transpose_octaves, phrasing=phrasing,
@@ -260,8 +262,8 @@ def render_feedback(notes: pd.DataFrame, config: dict[str, Any], *,
                       diagnostics=diagnostics)
 
 
-def _rehearsed(plan_part, rng: np.random.Generator, config: dict[str, Any], instrument: str,
-               models: dict, **take: Any,
+def _rehearsed(plan_part: Callable[..., Performance], rng: np.random.Generator,
+               config: dict[str, Any], instrument: str, models: dict, **take: Any,
                ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame | None, Performance]:
     """Rehearse a part under the controller; the kept take's audio, actions, diagnostics, plan.
 
