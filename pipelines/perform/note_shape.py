@@ -54,8 +54,9 @@ def bite(t: np.ndarray, t0: float, config: dict[str, Any]) -> np.ndarray:
     [1.3, 1.3, 1.11]
     """
     art = config["articulations"]
-    late = np.clip(np.asarray(t, np.float64) - t0 - art["bite_hold"], 0.0, None)
-    held = np.where(np.asarray(t) >= t0, np.exp(-late / art["bite_time"]), 0.0)
+    t = np.asarray(t, np.float64)
+    late = np.clip(t - t0 - art["bite_hold"], 0.0, None)
+    held = np.where(t >= t0, np.exp(-late / art["bite_time"]), 0.0)
     return 1.0 + (art["bite_force"] - 1.0) * held
 
 
