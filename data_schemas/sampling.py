@@ -87,6 +87,10 @@ SAMPLE_CHOICES = TableSpec(
                "instrument model's playable space (pipelines.methods.playable; 1 = as "
                "sampled). Absent before the transform.",
                minimum=0.0, exclusive_minimum=True, nullable=True, required=False),
+        Column("bite", pa.bool_(), "",
+               "The note caught the string with the rules' bite (pipelines.methods."
+               "sampled_bite; False = force as sampled). Absent before the transform.",
+               nullable=True, required=False),
     ),
 )
 

@@ -16,11 +16,14 @@ from pathlib import Path
 from typing import Any
 
 from data_schemas.errors import ParameterError
+from data_schemas.instruments import INSTRUMENT_NAMES
 
 #: Bounds on the number of Viterbi candidates per note.
 MAX_N_BEST = 1024
 #: Largest weight, scale or distance accepted (a sane bound, far above any useful value).
 MAX_VALUE = 1e6
+#: Settings that are lists of instrument names, not numbers.
+NAME_LISTS = ("render.bite",)
 
 
 @lru_cache(maxsize=1)
@@ -95,15 +98,19 @@ def _validate(config: dict, where: str) -> None:
             raise ParameterError(f"{where}: continuity_scale.{key}={value!r} must be > 0")
     if config["costs"]["dynamic_span"] <= 0:
         raise ParameterError(f"{where}: costs.dynamic_span must be > 0")
+    names = config["render"]["bite"]
+    if not isinstance(names, list) or not set(names) <= set(INSTRUMENT_NAMES):
+        raise ParameterError(f"{where}: render.bite={names!r} must be a list of instrument "
+                             f"names ({', '.join(INSTRUMENT_NAMES)})")
 
 
 def _numbers(table: dict, prefix: str):
-    """``(dotted name, value)`` of every setting below the top level (all are numbers)."""
+    """``(dotted name, value)`` of every numeric setting below the top level."""
     for key, value in table.items():
         if isinstance(value, dict):
             yield from _numbers(value, f"{prefix}{key}.")
-        elif prefix:
+        elif prefix and f"{prefix}{key}" not in NAME_LISTS:
             yield f"{prefix}{key}", value
 
 
-__all__ = ["MAX_N_BEST", "MAX_VALUE", "load_search_config"]
+__all__ = ["MAX_N_BEST", "MAX_VALUE", "NAME_LISTS", "load_search_config"]

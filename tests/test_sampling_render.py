@@ -146,6 +146,34 @@ def test_render_sampling_open_loop(tiny_db, scale):
     assert abs(left) < 0.05
 
 
+def test_sampled_strokes_bite_as_the_rules_and_say_so(tiny_db, scale, tmp_path):
+    """With ``[render] bite`` listing the violin, each sampled note that starts a stroke
+    plays the sampled force times the rules' bite from its onset; the choices record which
+    notes bit. Without it, the forces are the same samples' as they were chosen."""
+    from pipelines.methods.sampling import open_database, render_sampling
+    from pipelines.perform.config import load_config
+    from pipelines.perform.note_shape import bite
+
+    off = tmp_path / "off.toml"
+    off.write_text("[render]\nbite = []\n")
+    bit = render_sampling(scale, db=open_database(tiny_db / "db"), feedback=False,
+                          progress=False, audio=False).parts[0]
+    plain = render_sampling(scale, db=open_database(tiny_db / "db", search_config=off),
+                            feedback=False, progress=False, audio=False).parts[0]
+    assert bit.choices["bite"].all() and not plain.choices["bite"].any()  # detache scale
+    a, b = bit.performance.actions, plain.performance.actions
+    pd.testing.assert_frame_equal(a.drop(columns="bow_force"), b.drop(columns="bow_force"))
+    t, force = b["time"].to_numpy(), b["bow_force"].to_numpy()
+    onset = bit.targets["onset"].to_numpy()
+    end = onset + bit.targets["duration"].to_numpy()
+    note = np.searchsorted(onset, t, side="right") - 1
+    inside = (note >= 0) & (t < end[np.maximum(note, 0)]) & (force > 0) & ~b["pluck"]
+    want = force.copy()
+    want[inside] *= bite(t[inside], onset[note[inside]], load_config())
+    np.testing.assert_allclose(a["bow_force"].to_numpy(), want, rtol=1e-6)
+    assert (a["bow_force"].to_numpy()[inside] > force[inside]).mean() > 0.2
+
+
 def test_missing_database_is_a_clear_error(tmp_path, scale):
     from pipelines.methods.sampling import render_sampling
 

@@ -82,7 +82,9 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
     from gesture_db.assemble import assemble_actions
     from pipelines.listening.evaluate import evaluate
     from pipelines.methods.playable import to_playable
+    from pipelines.methods.sampled_bite import bite_chosen
     from pipelines.methods.sampling_db import adapt_forces
+    from pipelines.perform.config import load_config
     from synth.render import render_with_diagnostics
 
     targets, choices = practice_targets(samples, instrument)
@@ -91,6 +93,9 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
     actions = adapt_forces(actions, instrument, database.search_config,
                            sampled_from=instrument)
     actions, _ = to_playable(actions, targets, choices, instrument, database.search_config)
+    # each practice note starts a stroke from rest, and bites as it would in a piece
+    actions, _ = bite_chosen(actions, targets, choices, [None] * len(targets), load_config(),
+                             database.search_config, instrument)
     audio, diag = render_with_diagnostics(actions, instrument=instrument, engine="modal",
                                           sample_rate=sample_rate, seed=seed)
     found = evaluate(audio, actions, sample_rate=sample_rate, diagnostics=diag,

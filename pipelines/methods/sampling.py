@@ -33,6 +33,7 @@ from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
 from pipelines.methods.playable import loop_range, playable_band, to_playable
 from pipelines.methods.result import PartRender, RenderResult, mix
+from pipelines.methods.sampled_bite import bite_chosen
 from pipelines.methods.sampling_db import SamplingDatabase, adapt_forces, open_database
 from pipelines.methods.sampling_left_hand import play_left_hand
 from pipelines.perform.config import load_config
@@ -235,6 +236,8 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     actions = adapt_forces(actions, _name, database.search_config, sampled_from=source)
     actions, choices = to_playable(actions, targets, result.choices, _name,
                                    database.search_config)
+    actions, choices = bite_chosen(actions, targets, choices, bowed, config,
+                                   database.search_config, _name)
     actions, hand_warnings = play_left_hand(actions, targets, choices, bowed,
                                             database.left_hand, config)
     actions = _touches(_extra_rows(actions, events), events)
