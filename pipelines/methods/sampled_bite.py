@@ -88,14 +88,18 @@ def bite_samples(actions: pd.DataFrame, targets: pd.DataFrame, bowed: list[Any],
         return actions, np.zeros(len(targets), bool)
     out = actions.copy()
     t = actions["time"].to_numpy(np.float64)
-    s = actions["string"].to_numpy(int)
     force = actions["bow_force"].to_numpy(np.float64).copy()
     bowed_rows = ~actions["pluck"].to_numpy(bool) & (force > 0)
     onset = targets["onset"].to_numpy(np.float64)
     end = onset + targets["duration"].to_numpy(np.float64)
-    for i in np.flatnonzero(caught):
-        rows = bowed_rows & (s == int(targets["string"].iloc[i])) & (t >= onset[i]) & (t < end[i])
-        force[rows] *= bite(t[rows], float(onset[i]), config)
+    string = targets["string"].to_numpy(int)
+    for s in np.unique(string[caught]):
+        rows = np.flatnonzero(bowed_rows & (actions["string"].to_numpy(int) == s))
+        rows = rows[np.argsort(t[rows], kind="stable")]
+        for i in np.flatnonzero(caught & (string == s)):
+            lo, hi = np.searchsorted(t[rows], [onset[i], end[i]], side="left")
+            mine = rows[lo:hi]
+            force[mine] *= bite(t[mine], float(onset[i]), config)
     out["bow_force"] = np.minimum(force, ACTIONS.column("bow_force").maximum)
     return out, caught
 
