@@ -93,8 +93,9 @@ def bite_samples(actions: pd.DataFrame, targets: pd.DataFrame, bowed: list[Any],
     onset = targets["onset"].to_numpy(np.float64)
     end = onset + targets["duration"].to_numpy(np.float64)
     string = targets["string"].to_numpy(int)
+    row_string = actions["string"].to_numpy(int)
     for s in np.unique(string[caught]):
-        rows = np.flatnonzero(bowed_rows & (actions["string"].to_numpy(int) == s))
+        rows = np.flatnonzero(bowed_rows & (row_string == s))
         rows = rows[np.argsort(t[rows], kind="stable")]
         for i in np.flatnonzero(caught & (string == s)):
             lo, hi = np.searchsorted(t[rows], [onset[i], end[i]], side="left")
