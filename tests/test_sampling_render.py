@@ -174,6 +174,34 @@ def test_sampled_strokes_bite_as_the_rules_and_say_so(tiny_db, scale, tmp_path):
     assert (a["bow_force"].to_numpy()[inside] > force[inside]).mean() > 0.2
 
 
+def test_short_dotted_notes_are_sampled_on_the_string_unless_asked(tiny_db, tmp_path):
+    """Dotted notes played shorter than ``[render] spiccato_below`` are sampled from
+    spiccato strokes (their force falls to 0 between bounces); at the shipped 0 they are
+    sampled from staccato strokes, whose force stays on the string from each onset."""
+    from pipelines.methods.feedback import scale_notes
+    from pipelines.methods.sampling import open_database, render_sampling
+
+    notes = scale_notes(tonic=62, octaves=1, tempo=240.0)  # 0.25 s notes, played ~0.18 s
+    notes["staccato"] = True
+    bounce = tmp_path / "bounce.toml"
+    bounce.write_text("[render]\nspiccato_below = 0.2\n")
+    parts = {name: render_sampling(notes, db=open_database(tiny_db / "db", search_config=cfg),
+                                   feedback=False, progress=False, audio=False).parts[0]
+             for name, cfg in (("shipped", None), ("bounce", bounce))}
+    played = {k: p.targets["technique"].tolist() for k, p in parts.items()}
+    assert set(played["shipped"]) == {"staccato"} and set(played["bounce"]) == {"spiccato"}
+    for name, p in parts.items():
+        assert p.choices["group"].str.startswith(played[name][0]).all()
+        a = p.performance.actions
+        t, force = a["time"].to_numpy(), a["bow_force"].to_numpy()
+        at_onset = force[np.searchsorted(t, p.targets["onset"].to_numpy() + 0.01)]
+        # staccato: the bow is on the string 10 ms into every note; spiccato: in the air
+        if name == "shipped":
+            assert (at_onset > 0.05).all()
+        else:
+            assert (at_onset < 0.05).mean() > 0.5
+
+
 def test_missing_database_is_a_clear_error(tmp_path, scale):
     from pipelines.methods.sampling import render_sampling
 

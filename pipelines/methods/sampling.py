@@ -45,8 +45,6 @@ from pipelines.score.select import choose_parts
 
 #: Effective string lengths of transferred targets are violin-equivalent.
 VIOLIN = instrument_facts("violin")
-#: Staccato notes shorter than this (s) are played spiccato (off the string).
-SPICCATO_BELOW = 0.2
 
 
 @dataclass
@@ -60,20 +58,25 @@ class SampledPart(PartRender):
     extras: dict[str, Any] = field(default_factory=dict)
 
 
-def technique_of(e: Event) -> str:
-    """Bowing technique of an event: legato, staccato, spiccato, martele or detache."""
+def technique_of(e: Event, spiccato_below: float = 0.0) -> str:
+    """Bowing technique of an event: legato, staccato, spiccato, martele or detache.
+
+    A stopped note (a dot) is spiccato when it is played shorter than ``spiccato_below``
+    (s; the search settings' ``[render] spiccato_below``), staccato otherwise.
+    """
     in_slur = e.slur_position in ("init", "mid", "end") and np.isfinite(e.slur)
     if in_slur:
         return "legato"
     if e.stop:
-        return "spiccato" if (e.played_end - e.t0) < SPICCATO_BELOW else "staccato"
+        return "spiccato" if (e.played_end - e.t0) < spiccato_below else "staccato"
     if e.accent > 1.0:
         return "martele"
     return "detache"
 
 
 def targets_from_events(events: list[Event], notes: pd.DataFrame, *,
-                        sampled_from: str = "violin") -> tuple[pd.DataFrame, list[Event]]:
+                        sampled_from: str = "violin",
+                        spiccato_below: float = 0.0) -> tuple[pd.DataFrame, list[Event]]:
     """Sampling targets of the bowed events of one part.
 
     Parameters
@@ -85,6 +88,9 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame, *,
     sampled_from : str
         Instrument of the samples: the targets' effective string lengths are on its
         strings (a transfer from the violin: violin-equivalent).
+    spiccato_below : float, s
+        Stopped notes played shorter than this are sampled from spiccato strokes (off the
+        string); 0: all on the string (:func:`technique_of`).
 
     Returns
     -------
@@ -104,7 +110,7 @@ def targets_from_events(events: list[Event], notes: pd.DataFrame, *,
     has_next = np.r_[joined_next, False]
     has_prev = np.r_[False, joined_next]
     run = chain_positions(has_prev, has_next)
-    tech = np.array([technique_of(e) for e in bowed], object)
+    tech = np.array([technique_of(e, spiccato_below) for e in bowed], object)
     slur = np.array([e.slur_position if t == "legato" else "iso"
                      for e, t in zip(bowed, tech, strict=True)], object)
     # a slur position that the run breaks is re-derived from the neighbours in the slur
@@ -227,7 +233,9 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
     phrase_marks(events, config)
     correct_by_ear(events, _name, config)  # fingers where the notes sound in tune
     index, source, transfer = database.index_for(_name)
-    targets, bowed = targets_from_events(events, notes, sampled_from=source)
+    targets, bowed = targets_from_events(
+        events, notes, sampled_from=source,
+        spiccato_below=database.search_config["render"]["spiccato_below"])
     targets.attrs["instrument"] = source
     result = search(targets, index, predictors=database.predictors,
                     config=database.search_config)
