@@ -4,7 +4,8 @@ For every run of target notes (notes without rests) the chosen samples' velocity
 beta are stretched to the notes' durations (:mod:`gesture_db.stretch`) and joined
 (:mod:`gesture_db.join`) on a frame grid. The bow position is the integral of the velocity
 over the bow hair; when a run would travel further than the hair allows, its velocity is
-scaled down, and each run starts where its first stroke has room (down-bow near the frog,
+scaled down (as a whole, or stroke by stroke with a planner: :mod:`gesture_db.bow_plan`),
+and each run starts where its first stroke has room (down-bow near the frog,
 up-bow near the tip), so ``bow_position`` stays inside [0, 1]. The string and finger of each
 frame come from the score (the target note sounding). Between runs, and when the bow moves
 to another string, the bow is lifted (rows with zero force).
@@ -21,6 +22,7 @@ from data_schemas.actions import validate_actions
 from data_schemas.bow import BowBudget
 from data_schemas.errors import ParameterError, SchemaError
 from data_schemas.instruments import instrument_facts, limits
+from gesture_db.bow_plan import StrokePlanner, plan_run
 from gesture_db.join import CROSSFADE, Piece, join_run
 from gesture_db.stretch import EDGE, stretch
 
@@ -69,7 +71,8 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
                      *, frame_rate: float = FRAME_RATE, edge: float = EDGE,
                      crossfade: float = CROSSFADE,
                      bow_length: float = instrument_facts("violin").bow_length,
-                     margin: float = MARGIN) -> pd.DataFrame:
+                     margin: float = MARGIN,
+                     planner: StrokePlanner | None = None) -> pd.DataFrame:
     """Stretch and join the chosen samples into an actions table.
 
     Parameters
@@ -90,6 +93,10 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
         Bow hair length.
     margin : float
         Share of the hair kept free at the frog and at the tip.
+    planner : StrokePlanner, optional
+        Plans each run's strokes (:func:`gesture_db.bow_plan.plan_run`): each stroke's
+        speed scaled on its own. Default: the whole run's velocity scaled down by one
+        factor until it fits the hair.
 
     Returns
     -------
@@ -120,9 +127,8 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         t = _grid(onset[a], end[b - 1], frame_rate)
         sig = join_run(pieces[a:b], t, crossfade=crossfade)
-        pos = _bow_positions(t, sig[:, 0], int(direction[a]), bow_length, margin)
-        travel_scale = pos[1]
-        sig[:, 0] *= travel_scale
+        pos = _bow_positions(t, sig[:, 0], int(direction[a]), bow_length, margin, planner)
+        sig[:, 0] *= pos[1]
         note = np.clip(np.searchsorted(onset[a:b], t, side="right") - 1, 0, b - a - 1) + a
         parts.append(_rows(t, strings[note], fingers[note], sig, pos[0]))
     return validate_actions(_with_lifts(parts), source="gesture sampling")
@@ -159,11 +165,14 @@ def _grid(t0: float, t1: float, frame_rate: float) -> np.ndarray:
 
 
 def _bow_positions(t: np.ndarray, v: np.ndarray, direction: int, bow_length: float,
-                   margin: float) -> tuple[np.ndarray, float]:
+                   margin: float, planner: StrokePlanner | None = None
+                   ) -> tuple[np.ndarray, float | np.ndarray]:
     """Bow positions of one run and the velocity scale that keeps it inside the hair."""
     budget = BowBudget(bow_length, margin)
-    fit = budget.fit(budget.travel(np.r_[0.0, np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))]))
     want = margin + 0.06 if direction > 0 else 1.0 - margin - 0.06
+    if planner is not None:
+        return plan_run(t, v, budget, planner, want)
+    fit = budget.fit(budget.travel(np.r_[0.0, np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))]))
     lo, hi = fit.start_window
     start = float(np.clip(want, lo, max(lo, hi)))
     return np.clip(start + fit.travel, 0.0, 1.0), fit.scale
