@@ -83,13 +83,15 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
     from pipelines.listening.evaluate import evaluate
     from pipelines.methods.playable import to_playable
     from pipelines.methods.sampled_bite import bite_chosen
+    from pipelines.methods.sampled_bow import stroke_planner
     from pipelines.methods.sampling_db import adapt_forces
     from pipelines.perform.config import load_config
     from synth.render import render_with_diagnostics
 
     targets, choices = practice_targets(samples, instrument)
     actions = assemble_actions(targets, choices, database.contours,
-                               bow_length=instrument_facts(instrument).bow_length)
+                               bow_length=instrument_facts(instrument).bow_length,
+                               planner=stroke_planner(load_config(), database.search_config))
     actions = adapt_forces(actions, instrument, database.search_config,
                            sampled_from=instrument)
     actions, _ = to_playable(actions, targets, choices, instrument, database.search_config)
