@@ -72,7 +72,9 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
                      crossfade: float = CROSSFADE,
                      bow_length: float = instrument_facts("violin").bow_length,
                      margin: float = MARGIN,
-                     planner: StrokePlanner | None = None) -> pd.DataFrame:
+                     planner: StrokePlanner | None = None,
+                     speed_limit: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
+                     ) -> pd.DataFrame:
     """Stretch and join the chosen samples into an actions table.
 
     Parameters
@@ -97,6 +99,9 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
         Plans each run's strokes (:func:`gesture_db.bow_plan.plan_run`): each stroke's
         speed scaled on its own. Default: the whole run's velocity scaled down by one
         factor until it fits the hair.
+    speed_limit : callable, optional
+        ``(times s (n,), velocity m/s (n,)) -> velocity``: applied to each run's joined
+        velocity before its bow is planned (e.g. an acceleration limit).
 
     Returns
     -------
@@ -127,6 +132,8 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         t = _grid(onset[a], end[b - 1], frame_rate)
         sig = join_run(pieces[a:b], t, crossfade=crossfade)
+        if speed_limit is not None:
+            sig[:, 0] = speed_limit(t, sig[:, 0])
         pos = _bow_positions(t, sig[:, 0], int(direction[a]), bow_length, margin, planner)
         sig[:, 0] *= pos[1]
         note = np.clip(np.searchsorted(onset[a:b], t, side="right") - 1, 0, b - a - 1) + a

@@ -23,7 +23,7 @@ MAX_N_BEST = 1024
 #: Largest weight, scale or distance accepted (a sane bound, far above any useful value).
 MAX_VALUE = 1e6
 #: Settings that are lists of instrument names, not numbers.
-NAME_LISTS = ("render.bite",)
+NAME_LISTS = ("render.bite", "render.limit_acceleration")
 
 
 @lru_cache(maxsize=1)
@@ -98,10 +98,11 @@ def _validate(config: dict, where: str) -> None:
             raise ParameterError(f"{where}: continuity_scale.{key}={value!r} must be > 0")
     if config["costs"]["dynamic_span"] <= 0:
         raise ParameterError(f"{where}: costs.dynamic_span must be > 0")
-    names = config["render"]["bite"]
-    if not isinstance(names, list) or not set(names) <= set(INSTRUMENT_NAMES):
-        raise ParameterError(f"{where}: render.bite={names!r} must be a list of instrument "
-                             f"names ({', '.join(INSTRUMENT_NAMES)})")
+    for key in NAME_LISTS:
+        names = config["render"][key.split(".", 1)[1]]
+        if not isinstance(names, list) or not set(names) <= set(INSTRUMENT_NAMES):
+            raise ParameterError(f"{where}: {key}={names!r} must be a list of instrument "
+                                 f"names ({', '.join(INSTRUMENT_NAMES)})")
 
 
 def _numbers(table: dict, prefix: str):

@@ -9,9 +9,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from data_schemas.bow import BowBudget
+from data_schemas.errors import ParameterError
 from gesture_db.assemble import assemble_actions
 from gesture_db.bow_plan import DEADBAND, plan_run, stroke_index
-from pipelines.methods.sampled_bow import stroke_planner
+from gesture_db.search_config import load_search_config
+from pipelines.methods.sampled_bow import speed_limiter, stroke_planner
 from pipelines.perform.config import load_config
 
 BOW = 0.65
@@ -108,3 +110,52 @@ def test_a_drifting_run_slows_its_long_strokes_not_the_whole_run():
 
 def test_without_a_planner_the_setting_off_gives_none():
     assert stroke_planner(load_config(), {"render": {"plan_strokes": 0}}) is None
+
+
+LIMITED = {"render": {"max_acceleration": 5.0, "limit_acceleration": ["violin", "viola"]}}
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=2, max_size=60), st.floats(0.5, 20.0))
+def test_the_speed_limit_never_speeds_up_turns_or_accelerates_too_fast(values, most):
+    v = np.array(values)
+    t = np.arange(v.size) / 240.0
+    limit = speed_limiter({"render": {"max_acceleration": most,
+                                      "limit_acceleration": ["viola"]}}, "viola")
+    out = limit(t, v)
+    assert np.all(np.abs(out) <= np.abs(v) + 1e-12)
+    assert np.all((np.sign(out) == np.sign(v)) | (out == 0))
+    assert np.all(np.abs(np.diff(np.abs(out))) <= most / 240.0 + 1e-12)
+
+
+def test_the_speed_limit_is_off_at_zero_and_for_instruments_not_listed():
+    assert speed_limiter(LIMITED, "cello") is None
+    off = {"render": {"max_acceleration": 0.0, "limit_acceleration": ["violin"]}}
+    assert speed_limiter(off, "violin") is None
+    assert speed_limiter(LIMITED, "violin") is not None
+
+
+def test_an_assembled_run_turns_the_bow_within_the_limit():
+    """The drifting run's samples turn the bow at 10 m/s^2; limited to 5 before the bow
+    is planned, every frame on the string changes speed at most 5 m/s^2 times the
+    planner's largest speed-up (1.5), and the planned bow stays on the hair."""
+    targets, choices, contours = _drifting_run()
+    planner = stroke_planner(load_config(), {"render": {"plan_strokes": 1}})
+    free = assemble_actions(targets, choices, contours, bow_length=BOW, planner=planner)
+    a = assemble_actions(targets, choices, contours, bow_length=BOW, planner=planner,
+                         speed_limit=speed_limiter(LIMITED, "violin"))
+    most = 5.0 * load_config()["bow"]["max_speed_scale"] + 1e-6
+    for acts, fastest in ((free, most), (a, most)):
+        on = acts[acts["bow_force"] > 0]
+        rate = np.abs(np.diff(np.abs(on["bow_velocity"].to_numpy()))) / np.diff(
+            on["time"].to_numpy())
+        assert (rate.max() > fastest) == (acts is free)
+    pos = a.loc[a["bow_force"] > 0, "bow_position"].to_numpy()
+    assert pos.min() >= 0.03 - 1e-6 and pos.max() <= 0.97 + 1e-6
+
+
+def test_a_bad_speed_limit_setting_is_a_clear_error():
+    with pytest.raises(ParameterError, match="render.limit_acceleration"):
+        load_search_config(overrides={"render": {"limit_acceleration": ["banjo"]}})
+    with pytest.raises(ParameterError, match="render.max_acceleration"):
+        load_search_config(overrides={"render": {"max_acceleration": -1.0}})

@@ -22,6 +22,7 @@ True
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -29,6 +30,7 @@ import numpy as np
 from data_schemas.bow import BowBudget
 from gesture_db.bow_plan import StrokePlanner
 from pipelines.perform.bow_distribution import distribute
+from pipelines.perform.bow_speed import limit_acceleration
 
 
 def stroke_planner(config: dict[str, Any], search_config: dict[str, Any]
@@ -59,4 +61,43 @@ def stroke_planner(config: dict[str, Any], search_config: dict[str, Any]
     return plan
 
 
-__all__ = ["stroke_planner"]
+def speed_limiter(search_config: dict[str, Any], instrument: str
+                  ) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
+    """The acceleration limit on a sampled run's bow, or None (played as sampled).
+
+    Parameters
+    ----------
+    search_config : dict
+        Search settings: ``[render] max_acceleration`` (m/s^2, 0: off) and
+        ``limit_acceleration`` (the instruments it applies to).
+    instrument : str
+
+    Returns
+    -------
+    callable or None
+        ``(t s, v m/s) -> v``: the bow speed lowered where it changes faster than
+        ``max_acceleration`` (:func:`pipelines.perform.bow_speed.limit_acceleration`, the
+        rules' own limit, on ``|v|``; the direction kept). It is applied before the
+        run's strokes are planned, so a stroke the planner speeds up (at most ``[bow]
+        max_speed_scale``) changes speed that much faster.
+
+    Examples
+    --------
+    >>> limit = speed_limiter({"render": {"max_acceleration": 5.0,
+    ...                                   "limit_acceleration": ["violin"]}}, "violin")
+    >>> t = np.arange(0.0, 0.1, 0.01)
+    >>> limit(t, np.r_[-0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3, 0.3, 0.3, 0.3]).round(2).tolist()
+    [-0.15, -0.1, -0.05, 0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3]
+    """
+    render = search_config.get("render", {})
+    most = float(render.get("max_acceleration", 0.0))
+    if most <= 0 or instrument not in render.get("limit_acceleration", []):
+        return None
+
+    def limit(t: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return np.sign(v) * limit_acceleration(t, np.abs(v), most)
+
+    return limit
+
+
+__all__ = ["speed_limiter", "stroke_planner"]
