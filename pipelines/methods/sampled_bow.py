@@ -1,4 +1,4 @@
-"""Sampled runs plan their bow like the rules: each stroke's speed scaled on its own.
+"""Sampled runs bow like the rules: each stroke's speed planned on its own, turns limited.
 
 The joined samples of a run must stay on the hair. Scaled as a whole, a run that drifts is
 slowed everywhere (:mod:`gesture_db.bow_plan`); with ``[render] plan_strokes = 1`` in the
@@ -6,7 +6,9 @@ search settings, :func:`stroke_planner` hands the run's strokes to the rules' bo
 distribution (:func:`pipelines.perform.bow_distribution.distribute`, a linear programme:
 slowing a stroke to half costs as much as speeding it up 2x, each stroke at most
 ``[bow] max_speed_scale`` of the rules' configuration faster), which keeps every stroke as
-near its sampled speed as the bow allows.
+near its sampled speed as the bow allows. :func:`speed_limiter` holds a run's bow to the
+arm's acceleration first (``[render] max_acceleration`` on the instruments listed in
+``limit_acceleration``; the rules' own :func:`pipelines.perform.bow_speed.limit_acceleration`).
 
 Examples
 --------
