@@ -88,16 +88,17 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
     from pipelines.perform.config import load_config
     from synth.render import render_with_diagnostics
 
+    config = load_config()
     targets, choices = practice_targets(samples, instrument)
     actions = assemble_actions(targets, choices, database.contours,
                                bow_length=instrument_facts(instrument).bow_length,
-                               planner=stroke_planner(load_config(), database.search_config),
+                               planner=stroke_planner(config, database.search_config),
                                speed_limit=speed_limiter(database.search_config, instrument))
     actions = adapt_forces(actions, instrument, database.search_config,
                            sampled_from=instrument)
     actions, _ = to_playable(actions, targets, choices, instrument, database.search_config)
     # each practice note starts a stroke from rest, and bites as it would in a piece
-    actions, _ = bite_chosen(actions, targets, choices, [None] * len(targets), load_config(),
+    actions, _ = bite_chosen(actions, targets, choices, [None] * len(targets), config,
                              database.search_config, instrument)
     audio, diag = render_with_diagnostics(actions, instrument=instrument, engine="modal",
                                           sample_rate=sample_rate, seed=seed)

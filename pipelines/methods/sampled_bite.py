@@ -31,7 +31,6 @@ import numpy as np
 import pandas as pd
 
 from data_schemas.actions import ACTIONS
-from data_schemas.errors import ParameterError
 from pipelines.perform.note_shape import bite
 
 
@@ -108,15 +107,10 @@ def bite_samples(actions: pd.DataFrame, targets: pd.DataFrame, bowed: list[Any],
 def bite_on(search_config: dict, instrument: str) -> bool:
     """Whether ``instrument``'s sampled notes bite (listed in ``[render] bite``).
 
-    Raises
-    ------
-    ParameterError
-        ``bite`` that is not a list of instrument names.
+    The list is checked once, when the search settings are loaded
+    (:func:`gesture_db.search_config.load_search_config`).
     """
-    names = search_config.get("render", {}).get("bite", [])
-    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
-        raise ParameterError(f"[render] bite={names!r} must be a list of instrument names")
-    return instrument in names
+    return instrument in search_config.get("render", {}).get("bite", [])
 
 
 def bite_chosen(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.DataFrame,
