@@ -1,14 +1,15 @@
 """Chosen samples -> an actions table: stretch, join, bow bookkeeping and the left hand.
 
 For every run of target notes (notes without rests) the chosen samples' velocity, force and
-beta are stretched to the notes' durations (:mod:`gesture_db.stretch`) and joined
-(:mod:`gesture_db.join`) on a frame grid. The bow position is the integral of the velocity
-over the bow hair; when a run would travel further than the hair allows, its velocity is
-scaled down (as a whole, or stroke by stroke with a planner: :mod:`gesture_db.bow_plan`),
-and each run starts where its first stroke has room (down-bow near the frog,
-up-bow near the tip), so ``bow_position`` stays inside [0, 1]. The string and finger of each
-frame come from the score (the target note sounding). Between runs, and when the bow moves
-to another string, the bow is lifted (rows with zero force).
+beta are stretched to the notes' durations (:mod:`gesture_db.stretch`), joined
+(:mod:`gesture_db.join`) on a frame grid and, with a cut-off, low-pass filtered
+(:mod:`gesture_db.smooth`: the recordings' sensor noise). The bow position is the integral
+of the velocity over the bow hair; when a run would travel further than the hair allows,
+its velocity is scaled down (as a whole, or stroke by stroke with a planner:
+:mod:`gesture_db.bow_plan`), and each run starts where its first stroke has room (down-bow
+near the frog, up-bow near the tip), so ``bow_position`` stays inside [0, 1]. The string
+and finger of each frame come from the score (the target note sounding). Between runs, and
+when the bow moves to another string, the bow is lifted (rows with zero force).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from data_schemas.errors import ParameterError, SchemaError
 from data_schemas.instruments import instrument_facts, limits
 from gesture_db.bow_plan import StrokePlanner, plan_run
 from gesture_db.join import CROSSFADE, Piece, join_run
+from gesture_db.smooth import smooth_contours
 from gesture_db.stretch import EDGE, stretch
 
 #: Default control frame rate of assembled actions (Hz), like the recordings.
@@ -73,8 +75,8 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
                      bow_length: float = instrument_facts("violin").bow_length,
                      margin: float = MARGIN,
                      planner: StrokePlanner | None = None,
-                     speed_limit: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
-                     ) -> pd.DataFrame:
+                     speed_limit: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+                     cutoff: float = 0.0) -> pd.DataFrame:
     """Stretch and join the chosen samples into an actions table.
 
     Parameters
@@ -102,6 +104,10 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
     speed_limit : callable, optional
         ``(times s (n,), velocity m/s (n,)) -> velocity``: applied to each run's joined
         velocity before its bow is planned (e.g. an acceleration limit).
+    cutoff : float, Hz
+        Low-pass cut-off for each run's joined contours, before the speed limit
+        (:func:`gesture_db.smooth.smooth_contours`: the recordings' sensor noise); 0 plays
+        them as recorded.
 
     Returns
     -------
@@ -131,7 +137,7 @@ def assemble_actions(targets: pd.DataFrame, choices: pd.DataFrame,
     parts = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         t = _grid(onset[a], end[b - 1], frame_rate)
-        sig = join_run(pieces[a:b], t, crossfade=crossfade)
+        sig = smooth_contours(join_run(pieces[a:b], t, crossfade=crossfade), frame_rate, cutoff)
         if speed_limit is not None:
             sig[:, 0] = speed_limit(t, sig[:, 0])
         pos = _bow_positions(t, sig[:, 0], int(direction[a]), bow_length, margin, planner)

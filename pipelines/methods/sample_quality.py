@@ -83,7 +83,7 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
     from pipelines.listening.evaluate import evaluate
     from pipelines.methods.playable import to_playable
     from pipelines.methods.sampled_bite import bite_chosen
-    from pipelines.methods.sampled_bow import speed_limiter, stroke_planner
+    from pipelines.methods.sampled_bow import assembly_options
     from pipelines.methods.sampling_db import adapt_forces
     from pipelines.perform.config import load_config
     from synth.render import render_with_diagnostics
@@ -92,8 +92,7 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
     targets, choices = practice_targets(samples, instrument)
     actions = assemble_actions(targets, choices, database.contours,
                                bow_length=instrument_facts(instrument).bow_length,
-                               planner=stroke_planner(config, database.search_config),
-                               speed_limit=speed_limiter(database.search_config, instrument))
+                               **assembly_options(config, database.search_config, instrument))
     actions = adapt_forces(actions, instrument, database.search_config,
                            sampled_from=instrument)
     actions, _ = to_playable(actions, targets, choices, instrument, database.search_config)

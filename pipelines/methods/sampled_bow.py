@@ -103,3 +103,34 @@ def speed_limiter(search_config: dict[str, Any], instrument: str
 
 
 __all__ = ["speed_limiter", "stroke_planner"]
+
+
+def assembly_options(config: dict[str, Any], search_config: dict[str, Any],
+                     instrument: str) -> dict[str, Any]:
+    """How a sampled part's runs are assembled: the keywords of ``assemble_actions``.
+
+    Parameters
+    ----------
+    config : dict
+        Rules configuration.
+    search_config : dict
+        Search settings (``[render] plan_strokes``, ``max_acceleration``,
+        ``limit_acceleration`` and ``contour_cutoff``, Hz).
+    instrument : str
+
+    Returns
+    -------
+    dict
+        ``planner`` (:func:`stroke_planner`), ``speed_limit`` (:func:`speed_limiter`) and
+        ``cutoff`` (the low-pass on the recorded contours, Hz; 0: as recorded).
+
+    Examples
+    --------
+    >>> opts = assembly_options({"bow": {"max_speed_scale": 1.5}},
+    ...                         {"render": {"contour_cutoff": 20.0}}, "viola")
+    >>> opts["planner"] is None, opts["speed_limit"] is None, opts["cutoff"]
+    (True, True, 20.0)
+    """
+    return {"planner": stroke_planner(config, search_config),
+            "speed_limit": speed_limiter(search_config, instrument),
+            "cutoff": float(search_config.get("render", {}).get("contour_cutoff", 0.0))}

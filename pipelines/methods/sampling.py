@@ -34,7 +34,7 @@ from gesture_db.groups import chain_positions
 from pipelines.methods.playable import loop_range, playable_band, to_playable
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.methods.sampled_bite import bite_chosen
-from pipelines.methods.sampled_bow import speed_limiter, stroke_planner
+from pipelines.methods.sampled_bow import assembly_options
 from pipelines.methods.sampling_db import SamplingDatabase, adapt_forces, open_database
 from pipelines.methods.sampling_left_hand import play_left_hand
 from pipelines.perform.config import load_config
@@ -242,8 +242,7 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
                     config=database.search_config)
     actions = assemble_actions(targets, result.choices, database.contours,
                                bow_length=instrument_facts(_name).bow_length,
-                               planner=stroke_planner(config, database.search_config),
-                               speed_limit=speed_limiter(database.search_config, _name))
+                               **assembly_options(config, database.search_config, _name))
     actions = adapt_forces(actions, _name, database.search_config, sampled_from=source)
     actions, choices = to_playable(actions, targets, result.choices, _name,
                                    database.search_config)
