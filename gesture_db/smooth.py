@@ -1,13 +1,14 @@
 """Recorded bowing contours without their sensor noise.
 
 A recording's contours carry the noise of its sensors (motion capture and strain gauges:
-independent from frame to frame, :data:`gesture_db.simulate_config` ``[noise]``), and a
-sample played as recorded plays that noise as bow motion: a bow that trembles by a few
-per cent every frame. A player's arm moves far more slowly than the frame rate, so a
-low-pass filter with its cut-off well above the arm's own movements (bow changes take
-some 50-100 ms) and well below the frame rate removes most of the noise and keeps the
-gesture. The filter is a Gaussian (zero phase and without overshoot: a bow that stops is
-not sent backwards, a force that rises to a level does not pass it).
+independent from frame to frame; the simulated recordings draw it from ``[noise]`` in
+``gesture_db/config/simulate.toml``), and a sample played as recorded plays that noise as
+bow motion: a bow that trembles by a few per cent every frame. A player's arm moves far
+more slowly than the frame rate, so a low-pass filter with its cut-off well above the
+arm's own movements (bow changes take some 50-100 ms) and well below the frame rate
+removes most of the noise and keeps the gesture. The filter is a Gaussian (zero phase and
+without overshoot: a bow that stops is not sent backwards, a force that rises to a level
+does not pass it).
 """
 
 from __future__ import annotations
