@@ -9,6 +9,8 @@ slowing a stroke to half costs as much as speeding it up 2x, each stroke at most
 near its sampled speed as the bow allows. :func:`speed_limiter` holds a run's bow to the
 arm's acceleration first (``[render] max_acceleration`` on the instruments listed in
 ``limit_acceleration``; the rules' own :func:`pipelines.perform.bow_speed.limit_acceleration`).
+:func:`assembly_options` gathers both with ``[render] contour_cutoff``, the low-pass that
+takes the recordings' sensor noise off the contours (:mod:`gesture_db.smooth`).
 
 Examples
 --------
@@ -102,8 +104,6 @@ def speed_limiter(search_config: dict[str, Any], instrument: str
     return limit
 
 
-__all__ = ["speed_limiter", "stroke_planner"]
-
 
 def assembly_options(config: dict[str, Any], search_config: dict[str, Any],
                      instrument: str) -> dict[str, Any]:
@@ -134,3 +134,6 @@ def assembly_options(config: dict[str, Any], search_config: dict[str, Any],
     return {"planner": stroke_planner(config, search_config),
             "speed_limit": speed_limiter(search_config, instrument),
             "cutoff": float(search_config.get("render", {}).get("contour_cutoff", 0.0))}
+
+
+__all__ = ["assembly_options", "speed_limiter", "stroke_planner"]
