@@ -104,7 +104,6 @@ def speed_limiter(search_config: dict[str, Any], instrument: str
     return limit
 
 
-
 def assembly_options(config: dict[str, Any], search_config: dict[str, Any],
                      instrument: str) -> dict[str, Any]:
     """How a sampled part's runs are assembled: the keywords of ``assemble_actions``.
