@@ -235,3 +235,45 @@ def test_periodic_gate_lets_the_law_act_on_an_aperiodic_sound(aperiodicity):
 
 def test_periodic_gate_off_by_default():
     np.testing.assert_allclose(_gated_forces(0.0, 0.0)[-1], ControllerSettings().step ** 20)
+
+
+class ContentPredictor:
+    """A classifier that hears every window as good (class 3, full confidence)."""
+
+    def probabilities(self, features):
+        return np.array([0.0, 0.0, 1.0, 0.0, 0.0]), 3
+
+
+def played_forces(settings, hops, start=1.0):
+    """The controller's own force and the force it plays, hop by hop, while content."""
+    ctl = ForceController(PlantModel(), np.random.default_rng(7), settings)
+    ctl.predict = ContentPredictor()
+    ctl.start_note(0.0, start)
+    own, played = [], []
+    for _ in range(hops):
+        ctl.step(np.array([start]), 0.3, 0.3)
+        own.append(ctl.force)
+        played.append(ctl.played)
+    return np.array(own), np.array(played)
+
+
+def test_jitter_wobbles_the_played_force_without_drifting_it():
+    # 2,000 hops (11.6 s) of a content controller with 1 % jitter: the played force stays
+    # a 1 % wobble around the controller's own, which stays where it started. Carried
+    # from hop to hop, the jitter would be a random walk: sigma 0.01 * sqrt(2000) = 45 %.
+    settings = ControllerSettings(jitter=0.01, grace_hops=0, range_margin=0.0)
+    own, played = played_forces(settings, 2000)
+    np.testing.assert_array_equal(own, 1.0)
+    wobble = np.log(played)
+    assert 0.008 < wobble.std() < 0.012
+    assert np.abs(wobble).max() < 0.05
+    assert abs(np.corrcoef(wobble[:-1], wobble[1:])[0, 1]) < 0.1  # independent hops
+    # the second half wanders no further than the first
+    assert abs(wobble[1000:].mean() - wobble[:1000].mean()) < 0.002
+
+
+def test_held_factor_plays_the_plan_exactly():
+    # A trim of 1 (practice's open loop) holds the played factor at 1: no force jitter.
+    settings = ControllerSettings(jitter=0.01, grace_hops=0, range_margin=0.0, trim=1.0)
+    own, played = played_forces(settings, 200)
+    np.testing.assert_array_equal(played, 1.0)

@@ -9,9 +9,10 @@ unless class 3 ("good") has at least ``good_share`` of them, scales the bow forc
 per hop, so a 2x error is corrected in ``log 2 / log step`` hops (6 at the default). The law
 applies only while the bow moves faster than half the target velocity and does not
 decelerate. The trained K (1.005-1.05, 14-140 hops for a 2x error: longer than most notes)
-is kept in the model's metadata but the played law uses ``step``. Force and velocity get
-1 % Gaussian jitter each hop (a seeded generator); ``F >= 0``. A note starts at its pair's
-initial force by finger (correcting a planned force: at 1 or the practised factor).
+is kept in the model's metadata but the played law uses ``step``. The force and velocity
+played get 1 % Gaussian jitter each hop (a seeded generator), not carried on; ``F >= 0``.
+A note starts at its pair's initial force by finger (correcting a planned force: at 1 or
+the practised factor).
 
 :func:`play_plan` plays a :class:`HopPlan` (per-hop controls planned by the rules: string,
 finger, velocity, beta, pair, note starts) with the controller owning the force.
@@ -24,84 +25,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from data_schemas.errors import ParameterError
 from data_schemas.instruments import finger_ratio
 from synth.controls import Block, BowControl
 from synth.engines import Engine
 from synth.listening.classifier import PairModel
+from synth.listening.controller_settings import ControllerSettings
 from synth.listening.feature_spec import COL_APERIODICITY
 from synth.listening.features import HOP, StreamingFeatures, yin_window_for
 from synth.listening.law import correction
 
 MAX_FORCE = 50.0  # N, the actions table's limit
-
-
-@dataclass(frozen=True)
-class ControllerSettings:
-    """Tuning of the control law.
-
-    Attributes
-    ----------
-    average : int
-        Hops of class probabilities averaged (Vivi's later code averages 4 hops of
-        classes; longer averages delay the law and make a fast step overshoot).
-    min_speed_share : float
-        The law applies only while |v| > this x target velocity.
-    jitter : float
-        Relative sigma of the Gaussian jitter on force and velocity per hop.
-    range_margin : float
-        The force stays within the forces judged acceptable in training (the controller's
-        own experience) widened by this factor each way; 0 = only ``0 <= F <= 50 N``.
-    step : float
-        Force factor per hop at full confidence (``2 ** (1 / 6)``: a 2x error in 6 hops).
-    good_share : float
-        No correction while the averaged probability of class 3 is at least this.
-    change_hops : int
-        Hops after a finger change inside a stroke without the law (the analysis window
-        still holds the previous note: measured on viola and cello quartet parts, those hops
-        were heard as classes 4-5 and pulled the force down).
-    trim : float
-        Correcting a planned force: the factor stays within ``1 / trim .. trim`` (0: off).
-    trim_up : float
-        Correcting a planned force: the factor's upper bound instead of ``trim`` (0: ``trim``;
-        1: the law only lightens). On the instrument model more force did not end multiple
-        slipping once it had set in; lightening only helped feedback on the tuning set, not
-        on the held-out protocol (the README, "The law only lightens").
-    sure : float
-        No correction while neither side ("too little": classes 1-2, "too much": 4-5)
-        holds at least this probability (0: off).
-    grace_hops : int
-        Hops after a stroke starts during which the controller listens but neither averages
-        nor applies the law (25 hops, 145 ms: the bow's ramp to 0.33 m/s at 5 m/s^2, one
-        analysis window and the median attack), so the attack transient does not pull the
-        force away. Measured on the 30 s scale of ``bench/feedback_speed.py``: class 3 on
-        87 % of sustained hops at 15 hops, 91.5 % at 25, 91.7 % at 35.
-    practised_start : bool
-        Correcting a planned force: each stroke starts at its pair's practised factor
-        (:attr:`PairModel.start_factor`, learned by ``arco practice``) instead of 1.
-    periodic_gate : float
-        No correction while the window's YIN aperiodicity is below this: a periodic sound
-        is left alone whatever the classifier says (0: off).
-    """
-
-    average: int = 3
-    min_speed_share: float = 0.5
-    jitter: float = 0.01
-    range_margin: float = 2.0
-    grace_hops: int = 25
-    step: float = 2.0 ** (1.0 / 6.0)
-    good_share: float = 0.5
-    change_hops: int = 8
-    trim: float = 0.0
-    trim_up: float = 0.0
-    sure: float = 0.0
-    practised_start: bool = False
-    periodic_gate: float = 0.0
-
-    def __post_init__(self) -> None:
-        if 0.0 < self.trim_up < 1.0:
-            raise ParameterError(f"trim_up={self.trim_up} must be 0 (off) or at least 1: the "
-                                 f"factor's upper bound may not lie below the plan")
 
 
 class ForceController:
@@ -123,6 +56,7 @@ class ForceController:
         self.settings = settings or ControllerSettings()
         self.rng = rng
         self.force = 0.0
+        self.played = 0.0  # ``force`` with this hop's jitter, within the bounds
         self._recent: deque[np.ndarray] = deque(maxlen=self.settings.average)
         self._last_speed = 0.0
         self._hops = 0
@@ -144,6 +78,7 @@ class ForceController:
     def start_note(self, semitones: float, force: float | None = None) -> None:
         """Begin a note: initial force of the pair at this finger (or ``force``), N."""
         self.force = float(self.model.initial_force(semitones) if force is None else force)
+        self.played = self.force
         self._recent.clear()
         self._hops = 0
         self._quiet = 0
@@ -156,6 +91,7 @@ class ForceController:
     def rescale(self, factor: float) -> None:
         """Scale the force (a finger change inside a slur)."""
         self.force = float(np.clip(self.force * factor, 0.0, MAX_FORCE))
+        self.played = self.force
 
     def step(self, features: np.ndarray | None, speed: float, target_speed: float,
              noise: float | None = None) -> int:
@@ -196,11 +132,13 @@ class ForceController:
                 and not periodic:
             self.force *= correction(sum(self._recent) / len(self._recent), self.K,
                                      s.good_share, s.sure)
+        self.force = min(max(self.force, self.bounds[0]), self.bounds[1])
+        wobble = 1.0
         if s.jitter:
             if noise is None:
                 noise = float(self.rng.standard_normal())
-            self.force *= 1.0 + s.jitter * noise
-        self.force = min(max(self.force, self.bounds[0]), self.bounds[1])
+            wobble = 1.0 + s.jitter * noise
+        self.played = min(max(self.force * wobble, self.bounds[0]), self.bounds[1])
         return c
 
 
@@ -406,8 +344,8 @@ class _HopLoop:
                 self.draw += 1
             v = min(max(v, -5.0), 5.0)
             ratio = float(finger_ratio(semitones[i]))
-            force = ctl.force if planned is None else min(max(planned[i] * ctl.force,
-                                                              self.lowest[i]), self.highest[i])
+            force = ctl.played if planned is None else min(max(planned[i] * ctl.played,
+                                                               self.lowest[i]), self.highest[i])
             controls[s] = BowControl(v, force, self.beta[i], min(ratio, 0.8))
             self.force_log[i] = force
             self.vel_log[i] = v

@@ -18,7 +18,7 @@ from importlib import resources
 from pathlib import Path
 
 from data_schemas.errors import SchemaError
-from synth.listening.controller import ControllerSettings
+from synth.listening.controller_settings import ControllerSettings
 from synth.listening.teacher import TeacherThresholds
 
 #: Valid range of each key: (type, lowest, highest), both ends included.

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 from synth.listening.classifier import FINGERS
 from synth.listening.clips import Clip
-from synth.listening.controller import ControllerSettings
+from synth.listening.controller_settings import ControllerSettings
 from synth.listening.teacher import TeacherThresholds
 
 #: Vivi's bow lanes: dynamic -> (bow velocity m/s, beta).
