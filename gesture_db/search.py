@@ -5,7 +5,7 @@ database notes of its group; when the group is empty, those of the nearest compa
 (a fallback, at a cost; a sample of the other bow direction is mirrored). The target cost of
 candidate q for note m is
 
-    w_b (w_D |log2(D_m / D_q)| + w_le |log2(le_m / le_q)| + w_d min(|d_m - d_q| / span, 1)
+    w_b (w_D |log2(D_m / D_q)| + w_le |log2(le_m / le_q)| + w_d |d_m - d_q| / span
          + w_s |s_m - s_q| / 3) + w_g Mahalanobis(f_pred_m, f_q; Sigma_G) / sqrt(k)
     + w_fb dist(G),
 
@@ -404,6 +404,34 @@ def _chunks(n_rows: int, n_cand: int, budget: int = 2_000_000) -> list[slice]:
     return [slice(a, min(a + step, n_rows)) for a in range(0, n_rows, step)]
 
 
+def dynamic_costs(target: np.ndarray, sample: np.ndarray, span: float) -> np.ndarray:
+    """Dynamic cost of samples for targets: ``|d_target - d_sample| / span``, uncapped.
+
+    Maestre et al. (2010) give 0, 0.5 and 1 for zero, one and two levels apart, two levels
+    being their database's whole range (p, mf, f). On the ten levels here (0 = pppp .. 9 =
+    ffff) a cap at 1 made a pppp note cost the same with an ff sample as with an mf one, and
+    the search took the longer ff sample for a long pianissimo (Beethoven op. 59/3 i, cello).
+
+    Parameters
+    ----------
+    target, sample : np.ndarray
+        Dynamic levels (0 = pppp .. 9 = ffff), broadcast against each other.
+    span : float
+        Levels apart for a cost of 1 (``[costs] dynamic_span``).
+
+    Returns
+    -------
+    np.ndarray
+        The costs, broadcast.
+
+    Examples
+    --------
+    >>> dynamic_costs(np.array([[0.0]]), np.array([2.0, 5.0, 7.0]), 2.0)
+    array([[1. , 2.5, 3.5]])
+    """
+    return np.abs(np.asarray(target, np.float64) - np.asarray(sample, np.float64)) / span
+
+
 def _target_costs(t: pd.DataFrame, pred: np.ndarray, gi: GroupIndex,
                   config: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     """Weighted target cost (rows x candidates) and the unweighted gesture cost."""
@@ -414,8 +442,7 @@ def _target_costs(t: pd.DataFrame, pred: np.ndarray, gi: GroupIndex,
     s = t["string"].to_numpy(np.float64)[:, None]
     basic = w["duration"] * np.abs(np.log2(D / gi.duration))
     basic += w["string_length"] * np.abs(np.log2(le / gi.string_length))
-    basic += w["dynamic"] * np.minimum(np.abs(dyn - gi.dynamic)
-                                       / config["costs"]["dynamic_span"], 1.0)
+    basic += w["dynamic"] * dynamic_costs(dyn, gi.dynamic, config["costs"]["dynamic_span"])
     basic += w["string"] * np.abs(s - gi.string) / 3.0
     pw = np.asarray(pred, np.float64) @ gi.whiten
     d2 = (np.sum(pw**2, axis=1)[:, None] + np.sum(gi.whitened**2, axis=1)[None, :]
@@ -453,5 +480,5 @@ def quality_costs(quality: pd.DataFrame) -> np.ndarray:
 
 
 __all__ = ["EmptyGroupsError", "GroupIndex", "SearchIndex", "SearchResult",
-           "build_group_index", "edge_values", "group_distance", "quality_costs", "resolve_groups",
-           "search"]
+           "build_group_index", "dynamic_costs", "edge_values", "group_distance", "quality_costs",
+           "resolve_groups", "search"]
