@@ -255,3 +255,80 @@ def test_practice_needs_models_and_a_part_of_the_instrument(models_dir, tmp_path
     code = cli.main(["practice", "--models", str(models_dir), "-o", str(tmp_path / "o"),
                      "--score", str(cello), "--end-measure", "1", "--quiet"])
     assert code != 0 and "no violin part in ['c.musicxml']" in capsys.readouterr().err
+
+
+def _sampled_performance(tiny_db, tmp_path):
+    from pipelines.methods.sampling import open_database, sample_part
+    from pipelines.perform.config import load_config
+    from pipelines.score import read_score
+
+    notes = read_score(_d_string_score(tmp_path / "d.musicxml"))
+    perf, _, _ = sample_part(notes, open_database(tiny_db / "db"), load_config(),
+                             instrument="violin", rng=np.random.default_rng(0))
+    return notes, perf
+
+
+def test_sampled_plan_holds_the_sampled_force_and_each_stroke_peak_speed(tiny_db, tmp_path):
+    from pipelines.methods.sampled_loop import sampled_plan
+
+    _, perf = _sampled_performance(tiny_db, tmp_path)
+    plan, _, force = sampled_plan(perf, "violin")
+    bowed = perf.actions[~perf.actions["pluck"]]
+    assert set(bowed["string"]) == {1}
+    frames, f = bowed["time"].tolist(), bowed["bow_force"].tolist()
+    checked = 0
+    for k in range(0, plan.n_hops, 7):
+        t = (k + 1) * HOP / 44100
+        after = next((j for j, x in enumerate(frames) if x > t), None)
+        if after is None or after == 0 or frames[after - 1] == frames[after]:
+            continue
+        a, b = after - 1, after  # the frames around the hop's end: straight line between
+        w = (t - frames[a]) / (frames[b] - frames[a])
+        assert force[k, 1] == pytest.approx((1 - w) * f[a] + w * f[b], abs=1e-12)
+        checked += 1
+    assert checked > 40
+    assert force[:, 1].min() >= bowed["bow_force"].min() - 1e-12
+    assert force[:, 1].max() <= bowed["bow_force"].max() + 1e-12
+    assert np.all(force[:, [0, 2, 3]] == 0.0)
+    starts = np.flatnonzero(plan.note_start[:, 1]).tolist() + [plan.n_hops]
+    for a, b in zip(starts[:-1], starts[1:], strict=True):
+        peak = max(abs(plan.velocity[k, 1]) for k in range(a, b))
+        assert np.all(plan.target_speed[a:b, 1] == peak)
+
+
+def test_practice_plays_the_sampled_bowing(tiny_db, models_dir, tmp_path):
+    from pipelines.listening.practice import _planned, practice_part
+    from pipelines.methods.sampling import open_database
+    from pipelines.perform.config import load_config
+    from synth.listening.classifier import load_models
+
+    notes, perf = _sampled_performance(tiny_db, tmp_path)
+    db = open_database(tiny_db / "db")
+    _, plan, _, sampled = _planned(notes, load_config(), instrument="violin", seed=0,
+                                   sample_rate=44100, database=db)
+    _, _, _, ruled = _planned(notes, load_config(), instrument="violin", seed=0,
+                              sample_rate=44100)
+    again = _planned(notes, load_config(), instrument="violin", seed=0, sample_rate=44100,
+                     database=db)[0]
+    pd.testing.assert_frame_equal(perf.actions, again.actions)  # the sampled bowing
+    bowed = plan.bowed[:, 1]
+    assert np.abs(np.log(sampled[bowed, 1] / ruled[: plan.n_hops][bowed, 1])).max() > 0.1
+    hops = practice_part(notes, load_config(), load_models(models_dir, "violin"),
+                         instrument="violin", seed=0, variants=2, database=db)
+    assert len(hops) > 50 and set(hops["variant"]) == {0, 1}
+    assert set(hops["label"]) <= {2, 3, 4} and set(hops["teacher_label"]) <= {1, 2, 3, 4, 5}
+    assert np.all(hops["label"][hops["teacher_label"] == 3] == 3)
+
+
+def test_practice_cli_on_sampled_bowing(tiny_db, models_dir, tmp_path, capsys):
+    score = _d_string_score(tmp_path / "d.musicxml")
+    out = tmp_path / "practised"
+    base = ["practice", "--models", str(models_dir), "-o", str(out), "--score", str(score),
+            "--end-measure", "1", "--seeds", "1", "--variants", "2", "--quiet"]
+    code = cli.main([*base, "--performer", "sampling"])
+    assert code != 0 and "--performer sampling needs --db DIR" in capsys.readouterr().err
+    code = cli.main([*base, "--performer", "both", "--db", str(tiny_db / "db")])
+    text, err = capsys.readouterr()
+    assert code == 0, err
+    practice = json.loads((out / "violin-1-mf.json").read_text())["practice"]
+    assert practice["performers"] == ["rules", "sampling"] and practice["hops_added"] > 100

@@ -40,6 +40,8 @@ from synth.listening.features import FEATURE_NAMES, HOP, StreamingFeatures, yin_
 OPEN_LOOP = ControllerSettings(range_margin=0.0, trim=1.0)
 #: Share of strokes played at the planned force.
 AS_PLANNED = 1.0 / 3.0
+#: Who plans the bowing that practice plays: the rules, or gestures sampled from a database.
+PERFORMERS = ("rules", "sampling")
 
 
 @dataclass(frozen=True)
@@ -112,10 +114,11 @@ def heard_features(plan: HopPlan, audio: np.ndarray, sample_rate: int) -> np.nda
 
 def practice_part(notes: pd.DataFrame, config: dict[str, Any], models: dict, *,
                   instrument: str, seed: int, spread: float = 2.0, variants: int = 4,
-                  sample_rate: int = 44100) -> pd.DataFrame:
+                  sample_rate: int = 44100, database=None) -> pd.DataFrame:
     """Play one part open loop in variants of per-stroke force factors; label every hop.
 
-    The rules plan the part once; each variant plays that plan with its own factor per
+    The rules (or, with ``database``, gesture sampling) plan the part once; each variant
+    plays that plan with its own factor per
     stroke (:func:`stroke_factors`). The teacher judges every sustained hop of every
     variant; each stroke's best variant is the one with the most class-3 hops (ties: the
     factor nearest 1). A hop's label is what the controller should do there
@@ -139,6 +142,10 @@ def practice_part(notes: pd.DataFrame, config: dict[str, Any], models: dict, *,
     variants : int
         Renders of the part, at least 2.
     sample_rate : int, Hz
+    database : pipelines.methods.sampling_db.SamplingDatabase, optional
+        Play the bowing sampled from this gesture database (the plan of
+        ``--method sampling``: its velocity, force and contact point per hop) instead of the
+        rules'; the variants' factors multiply the sampled force.
 
     Returns
     -------
@@ -147,16 +154,10 @@ def practice_part(notes: pd.DataFrame, config: dict[str, Any], models: dict, *,
         ``stroke`` (index on its string), ``dynamic``, ``hop``, ``label``,
         ``teacher_label``, ``factor`` and one column per feature name.
     """
-    from pipelines.methods.feedback import hop_plan, planned_forces
-    from pipelines.perform.rules import fermata_warp, perform_part
-
     if variants < 2:
         raise ParameterError(f"variants={variants}: practice compares at least 2 renders")
-    warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
-    perf = perform_part(notes, config, instrument=instrument, rng=np.random.default_rng(seed),
-                        warp=warp)
-    plan, span = hop_plan(perf, config, instrument, sample_rate=sample_rate)
-    planned = planned_forces(perf, plan, sample_rate)
+    perf, plan, span, planned = _planned(notes, config, instrument=instrument, seed=seed,
+                                         sample_rate=sample_rate, database=database)
     frames = []
     for v in range(variants):
         factors = stroke_factors(plan, np.random.default_rng([seed, 2, v]), spread)
@@ -168,6 +169,32 @@ def practice_part(notes: pd.DataFrame, config: dict[str, Any], models: dict, *,
     hops.insert(hops.columns.get_loc("label") + 1, "teacher_label", hops["label"])
     hops["label"] = direction_labels(hops)
     return hops
+
+
+def _planned(notes: pd.DataFrame, config: dict[str, Any], *, instrument: str, seed: int,
+             sample_rate: int, database=None) -> tuple:
+    """The part's performance, hop plan, time span and planned force per hop (N).
+
+    The rules' plan (their force per hop), or with ``database`` the sampled one (the
+    sampled force per hop, :func:`pipelines.methods.sampled_loop.sampled_plan`).
+    """
+    from pipelines.methods.feedback import hop_plan, planned_forces
+    from pipelines.perform.rules import fermata_warp, perform_part
+
+    warp = fermata_warp(notes, config["articulations"]["fermata_stretch"])
+    rng = np.random.default_rng(seed)
+    if database is not None:
+        from pipelines.methods.sampled_loop import sampled_plan
+        from pipelines.methods.sampling import sample_part
+
+        perf, _targets, _choices = sample_part(notes, database, config, instrument=instrument,
+                                               warp=warp, rng=rng)
+        plan, span, planned = sampled_plan(perf, instrument, config=config,
+                                           sample_rate=sample_rate)
+        return perf, plan, span, planned
+    perf = perform_part(notes, config, instrument=instrument, rng=rng, warp=warp)
+    plan, span = hop_plan(perf, config, instrument, sample_rate=sample_rate)
+    return perf, plan, span, planned_forces(perf, plan, sample_rate)
 
 
 def _play_variant(perf, plan: HopPlan, span: np.ndarray, planned: np.ndarray,
@@ -250,7 +277,9 @@ def direction_labels(hops: pd.DataFrame, tolerance: float = 1.05) -> np.ndarray:
 def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
                   models_dir: str | os.PathLike, *, config: dict[str, Any],
                   seeds: Sequence[int], spread: float = 2.0, variants: int = 4,
-                  workers: int = 1, progress: bool = True) -> pd.DataFrame:
+                  workers: int = 1, progress: bool = True,
+                  performers: Sequence[str] = ("rules",),
+                  db: str | os.PathLike | None = None) -> pd.DataFrame:
     """Judged practice hops of every part of ``instrument`` in the excerpts, every seed.
 
     Parameters
@@ -262,7 +291,7 @@ def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
     config : dict
         Rules configuration.
     seeds : sequence of int
-        One practice render of every part per seed.
+        One practice render of every part per seed and performer.
     spread : float
         See :func:`stroke_factors`.
     variants : int
@@ -271,35 +300,30 @@ def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
         Local processes.
     progress : bool
         Progress bar over the renders.
+    performers : sequence of str
+        Who plans the bowing (:data:`PERFORMERS`): ``rules``, ``sampling`` (gestures
+        sampled from ``db``), or both.
+    db : path-like, optional
+        Gesture database, needed by the ``sampling`` performer.
 
     Returns
     -------
     pandas.DataFrame
-        The rows of :func:`practice_part` with ``part`` (``stem#index``) and ``seed``.
+        The rows of :func:`practice_part` with ``part`` (``stem#index``), ``performer``
+        and ``seed``.
 
     Raises
     ------
     ParameterError
-        None of the excerpts has a part for ``instrument``.
+        None of the excerpts has a part for ``instrument``; an unknown performer; the
+        ``sampling`` performer without ``db``.
     """
     from concurrent.futures import ProcessPoolExecutor
 
     from tqdm import tqdm
 
-    from pipelines.score import read_score
-    from pipelines.score.select import select_measures, select_movement
-
-    jobs = []
-    for ex in excerpts:
-        notes = select_measures(select_movement(read_score(ex.path), None), ex.start_measure,
-                                ex.end_measure)
-        for i, part in notes.groupby("part_index", sort=True):
-            if str(part["instrument"].iloc[0]) == instrument:
-                jobs += [(f"{Path(ex.path).stem}#{i}", part, seed, config, str(models_dir),
-                          instrument, spread, variants) for seed in seeds]
-    if not jobs:
-        raise ParameterError(f"practice: no {instrument} part in "
-                             f"{[Path(e.path).name for e in excerpts]}")
+    jobs = _practice_jobs(excerpts, instrument, models_dir, config=config, seeds=seeds,
+                          spread=spread, variants=variants, performers=performers, db=db)
     bar = tqdm(total=len(jobs), desc=f"practice {instrument}", unit="render",
                disable=not progress)
     with ProcessPoolExecutor(max(int(workers), 1)) as pool:
@@ -311,13 +335,47 @@ def practice_hops(excerpts: Sequence[Excerpt], instrument: str,
     return pd.concat(frames, ignore_index=True)
 
 
+def _practice_jobs(excerpts: Sequence[Excerpt], instrument: str,
+                   models_dir: str | os.PathLike, *, config: dict[str, Any],
+                   seeds: Sequence[int], spread: float, variants: int,
+                   performers: Sequence[str], db: str | os.PathLike | None) -> list[tuple]:
+    """One job per part of ``instrument``, seed and performer (see :func:`practice_hops`)."""
+    from pipelines.score import read_score
+    from pipelines.score.select import select_measures, select_movement
+
+    unknown = sorted(set(performers) - set(PERFORMERS))
+    if unknown or not performers:
+        raise ParameterError(f"practice: performers {list(performers)}; choose from "
+                             f"{list(PERFORMERS)}")
+    if "sampling" in performers and db is None:
+        raise ParameterError("practice: the sampling performer needs a gesture database "
+                             "(--db DIR, from arco build-db)")
+    jobs = []
+    for ex in excerpts:
+        notes = select_measures(select_movement(read_score(ex.path), None), ex.start_measure,
+                                ex.end_measure)
+        for i, part in notes.groupby("part_index", sort=True):
+            if str(part["instrument"].iloc[0]) == instrument:
+                jobs += [(f"{Path(ex.path).stem}#{i}", part, seed, config, str(models_dir),
+                          instrument, spread, variants, who,
+                          None if who == "rules" else str(db))
+                         for who in performers for seed in seeds]
+    if not jobs:
+        raise ParameterError(f"practice: no {instrument} part in "
+                             f"{[Path(e.path).name for e in excerpts]}")
+    return jobs
+
+
 def _practice_job(job: tuple) -> pd.DataFrame:
+    from pipelines.methods.sampling_db import open_database
     from synth.listening.classifier import load_models
 
-    name, part, seed, config, models_dir, instrument, spread, variants = job
+    name, part, seed, config, models_dir, instrument, spread, variants, who, db = job
     hops = practice_part(part, config, load_models(models_dir, instrument),
-                         instrument=instrument, seed=seed, spread=spread, variants=variants)
+                         instrument=instrument, seed=seed, spread=spread, variants=variants,
+                         database=None if db is None else open_database(db))
     hops.insert(0, "seed", seed)
+    hops.insert(0, "performer", who)
     hops.insert(0, "part", name)
     return hops
 
@@ -325,12 +383,13 @@ def _practice_job(job: tuple) -> pd.DataFrame:
 def practise(instrument: str, models_in: str | os.PathLike, out_dir: str | os.PathLike,
              excerpts: Sequence[Excerpt], *, config: dict[str, Any], seeds: Sequence[int],
              spread: float = 2.0, variants: int = 4, workers: int = 1,
-             progress: bool = True) -> list[dict[str, Any]]:
+             progress: bool = True, performers: Sequence[str] = ("rules",),
+             db: str | os.PathLike | None = None) -> list[dict[str, Any]]:
     """Practise ``instrument``'s parts of the excerpts and write the refitted pairs.
 
     ``out_dir`` receives the refitted pairs of ``instrument`` and a copy of every other file
     of ``models_in`` it does not hold yet (other instruments' pairs), so it serves
-    ``--models`` on its own.
+    ``--models`` on its own. ``performers`` and ``db``: see :func:`practice_hops`.
 
     Returns
     -------
@@ -353,9 +412,13 @@ def practise(instrument: str, models_in: str | os.PathLike, out_dir: str | os.Pa
         raise ParameterError(f"practice writes new models: -o {out_dir} must differ from "
                              f"--models {models_in}")
     load_models(src, instrument)  # a clear error before any rendering
+    if db is not None and "sampling" in performers:
+        from pipelines.methods.sampling_db import open_database
+
+        open_database(db)
     hops = practice_hops(excerpts, instrument, src, config=config, seeds=seeds,
                          spread=spread, variants=variants, workers=workers,
-                         progress=progress)
+                         progress=progress, performers=performers, db=db)
     dst.mkdir(parents=True, exist_ok=True)
     for f in src.glob("*.*"):
         if f.is_file() and f.suffix in (".json", ".npz") and not (dst / f.name).exists():
@@ -364,9 +427,10 @@ def practise(instrument: str, models_in: str | os.PathLike, out_dir: str | os.Pa
                            for e in excerpts],
               "seeds": [int(x) for x in seeds], "spread": float(spread),
               "variants": int(variants), "labels": "direction (practice variants)",
+              "performers": list(performers),
               "from_models": str(src)}
     return refit_models(hops, src, dst, instrument, record=record)
 
 
-__all__ = ["AS_PLANNED", "OPEN_LOOP", "Excerpt", "heard_features", "practice_hops",
+__all__ = ["AS_PLANNED", "OPEN_LOOP", "PERFORMERS", "Excerpt", "heard_features", "practice_hops",
            "direction_labels", "practice_part", "practise", "stroke_factors"]

@@ -17,11 +17,9 @@ force, so the sampled contour keeps its shape while its level follows the ear.
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import sys
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -31,10 +29,11 @@ from data_schemas.errors import ParameterError
 from data_schemas.instruments import finger_ratio, instrument_facts, limits
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
-from pipelines.methods.playable import loop_range, playable_band, to_playable
+from pipelines.methods.playable import playable_band, to_playable
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.methods.sampled_bite import bite_chosen
 from pipelines.methods.sampled_bow import assembly_options
+from pipelines.methods.sampled_loop import correct_force
 from pipelines.methods.sampling_db import SamplingDatabase, adapt_forces, open_database
 from pipelines.methods.sampling_left_hand import play_left_hand
 from pipelines.perform.config import load_config
@@ -397,100 +396,6 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
                                       max_duration=float("inf"))  # notes bounded already
     part.audio = np.asarray(y, np.float32)
     part.diagnostics = diag
-
-
-# --------------------------------------------------------------------------- feedback
-
-
-def _loop_range(plan, sampled: np.ndarray, instrument: str,
-                band: float) -> tuple[np.ndarray, np.ndarray] | None:
-    """The loop's per-hop force range inside the playable band (None: band 0, off)."""
-    from synth.strings import reference_forces
-
-    if band == 0.0:
-        return None
-    return loop_range(sampled, plan.velocity, plan.beta, reference_forces(instrument), band)
-
-
-def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrument: str,
-                  sample_rate: int = 44100, seed: int = 0, engine: str = "modal",
-                  band: float = 0.0) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame]:
-    """Play sampled actions with the listening controller correcting the force hop by hop.
-
-    The single integration point with :mod:`synth.listening.controller`: the hop plan of the
-    sampled actions comes from :func:`pipelines.methods.feedback.hop_plan`; per string a
-    controller (:func:`synth.listening.controller.play_plan` with ``planned_force``) holds a
-    correction factor that starts at 1 on every stroke and is multiplied by ``K**(3 - c_avg)``
-    from the classes it hears; the force played is the sampled force times that factor
-    (clipped to 0..50 N), by pure feedback's law (``FEEDBACK_SETTINGS``: within 1/1.5..1.5,
-    moving only at 85 % sure). Unbounded, on the rules' tuning set it gave Helmholtz share
-    0.815 and class 3 0.598 (this law: 0.842, 0.666; README "Gesture database").
-
-    Parameters
-    ----------
-    perf : Performance
-        The sampled performance.
-    models_dir : path-like
-        Directory written by ``arco train``.
-    instrument : str
-    sample_rate : int, Hz
-    seed : int
-        Seed of the controller's jitter and the engine.
-    engine : str
-        Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
-    band : float
-        Playable band: no hop's force leaves it further than sampled (0: off; ``loop_range``).
-
-    Returns
-    -------
-    audio : np.ndarray [shape=(n,)], float32
-    actions : pandas.DataFrame
-        What was played (one frame per hop per string).
-    diagnostics : pandas.DataFrame
-        Contact diagnostics per hop per string.
-    """
-    from pipelines.methods.feedback import (
-        FEEDBACK_SETTINGS,
-        TAIL,
-        diagnostics_table,
-        hop_plan,
-        played_actions,
-    )
-    from synth.engines import get_engine
-    from synth.listening.classifier import load_models
-    from synth.listening.controller import play_plan
-    from synth.listening.features import HOP
-
-    if sample_rate not in (44100, 48000):
-        raise ParameterError(f"sample_rate={sample_rate}: feedback control needs 44100 or "
-                             "48000 Hz")
-    if not Path(models_dir).is_dir():
-        raise ParameterError(f"--models {models_dir}: no such directory (train models with "
-                             "arco train, or play open loop with --method sampling-open)")
-    plan, span = hop_plan(perf, load_config(), instrument, sample_rate=sample_rate)
-    models = load_models(models_dir, instrument)
-    n, n_strings = plan.bowed.shape
-    t = (np.arange(n) + 1) * HOP / sample_rate
-    sampled = np.zeros((n, n_strings))
-    target_speed = np.zeros((n, n_strings))
-    actions = perf.actions
-    for s, rows in actions[~actions["pluck"]].groupby("string"):
-        time = rows["time"].to_numpy(np.float64)
-        sampled[:, int(s)] = np.interp(t, time, rows["bow_force"].to_numpy(np.float64))
-        speed = np.abs(plan.velocity[:, int(s)])
-        # planned speed of each stroke: its peak speed (the sampled gesture's own target)
-        stroke = np.cumsum(plan.note_start[:, int(s)])
-        peak = pd.Series(speed).groupby(stroke).transform("max").to_numpy()
-        target_speed[:, int(s)] = peak
-    plan = dataclasses.replace(plan, target_speed=target_speed)
-    inst = get_engine(engine, instrument, sample_rate=sample_rate, seed=seed)
-    log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 2]),
-                    settings=FEEDBACK_SETTINGS, record_diagnostics=True,
-                    planned_force=sampled, force_range=_loop_range(plan, sampled, instrument, band))
-    tail = inst.process(int(TAIL * sample_rate), {}).audio
-    played = played_actions(perf, plan, span, log, sample_rate=sample_rate)
-    y = np.concatenate([log.audio, tail]).astype(np.float32)
-    return y, played, diagnostics_table(log, sample_rate)
 
 
 __all__ = ["SampledPart", "SamplingDatabase", "adapt_forces", "correct_force", "open_database",

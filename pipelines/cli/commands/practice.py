@@ -45,6 +45,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--variants", type=positive_int, default=4,
                    help="renders of every part per seed, each at its own factors; a hop's "
                         "label says which way its stroke's best variant lay (default 4)")
+    p.add_argument("--performer", choices=("rules", "sampling", "both"), default="rules",
+                   help="who plans the bowing practised: the rules, gestures sampled from "
+                        "--db (the bowing of --method sampling), or both (default rules)")
+    p.add_argument("--db", metavar="DIR",
+                   help="gesture database (arco build-db) for --performer sampling or both")
     p.add_argument("--config", metavar="RULES.toml", help="rules settings")
     p.add_argument("--workers", type=positive_int, default=1, help="local worker processes")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -62,6 +67,9 @@ def run(args: argparse.Namespace) -> int:
     if args.variants < 2:
         raise ParameterError(f"--variants {args.variants} must be >= 2 (practice compares "
                              "renders of the same strokes)")
+    if args.performer != "rules" and not args.db:
+        raise ParameterError(f"--performer {args.performer} needs --db DIR (a gesture "
+                             "database from arco build-db)")
     output_dir(args.output)
     start, end = args.start_measure, args.end_measure
     if end < start:
@@ -71,7 +79,9 @@ def run(args: argparse.Namespace) -> int:
     summary = practise(args.instrument, args.models, args.output, excerpts,
                        config=load_config(args.config), seeds=chosen, spread=args.spread,
                        variants=args.variants, workers=args.workers,
-                       progress=not args.quiet)
+                       progress=not args.quiet, db=args.db,
+                       performers=("rules", "sampling") if args.performer == "both"
+                       else (args.performer,))
     for r in summary:
         if r["hops_added"]:
             unheard = r["agreement_unheard"]
