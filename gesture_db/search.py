@@ -2,8 +2,10 @@
 
 For each target note (:data:`data_schemas.sampling.SAMPLING_TARGETS`) the candidates are the
 database notes of its group; when the group is empty, those of the nearest compatible group
-(a fallback, at a cost; a sample of the other bow direction is mirrored). The target cost of
-candidate q for note m is
+(a fallback, at a cost; a sample of the other bow direction is mirrored); with ``[fallback]
+neighbours`` > 0 the groups within that distance compete too, at the same cost
+(:func:`source_groups`, candidates merged by :mod:`gesture_db.search_candidates`). The
+target cost of candidate q for note m is
 
     w_b (w_D |log2(D_m / D_q)| + w_le |log2(le_m / le_q)| + w_d |d_m - d_q| / span
          + w_s |s_m - s_q| / 3) + w_g Mahalanobis(f_pred_m, f_q; Sigma_G) / sqrt(k)
@@ -30,6 +32,7 @@ import pandas as pd
 from data_schemas.errors import ArcoError, ParameterError
 from data_schemas.sampling import validate_choices, validate_targets
 from gesture_db.groups import CONTOUR_PARAMS, grammar_for
+from gesture_db.search_candidates import Candidates
 from gesture_db.search_config import load_search_config
 from gesture_db.search_kernel import path_cost, viterbi
 
@@ -281,33 +284,69 @@ def search(targets: pd.DataFrame, index: SearchIndex, *, predictors=None,
     if len(targets) == 0:
         raise ParameterError("no target notes to search samples for")
     resolved = _resolve_or_raise(sorted(targets["group"].unique()), index, config)
-    n_best = int(min(config["n_best"], max(len(index.groups[g]) for g, _ in resolved.values())))
-    cands = _Candidates.empty(len(targets), n_best)
+    sources = source_groups(resolved, sorted(index.groups), config)
+    n_best = int(min(config["n_best"], max(sum(len(index.groups[r]) for r, _ in src)
+                                           for src in sources.values())))
+    cands = Candidates.empty(len(targets), n_best)
     context = context_features(targets)
     group_col = targets["group"].to_numpy()
-    for g, (real, dist) in resolved.items():
+    for g, src in sources.items():
         rows = np.flatnonzero(group_col == g)
-        gi = index.groups[real]
-        pred = predictors.predict(real, context[rows]) if predictors is not None else None
-        if pred is None:
-            pred = np.broadcast_to(gi.feature_mean, (rows.size, gi.feature_mean.size))
-        flip = _parts(g)[1] != _parts(real)[1]
-        base = config["weights"]["fallback"] * dist
-        for chunk in _chunks(rows.size, len(gi)):
-            cost, cg = _target_costs(targets.iloc[rows[chunk]], pred[chunk], gi, config)
-            cost += base
-            cands.keep_cheapest(rows[chunk], cost, cg, gi, real, flip)
+        for real, dist in src:
+            _add_group(cands, targets, rows, context, g, real, dist, index, predictors, config)
     m = np.arange(len(targets))
     path, total, tc, cc = _best_path(cands, targets, config)
-    chosen = cands.index[m, path]
+    chosen, used = cands.index[m, path], cands.used[m, path]
     choices = pd.DataFrame({
         "target_index": m.astype(np.int32),
-        "note_id": [index.groups[cands.used[i]].note_id[chosen[i]] for i in m],
-        "group": group_col, "sample_group": cands.used.astype(str), "mirrored": cands.mirrored,
-        "sample_duration": [index.groups[cands.used[i]].duration[chosen[i]] for i in m],
+        "note_id": [index.groups[used[i]].note_id[chosen[i]] for i in m],
+        "group": group_col, "sample_group": used.astype(str),
+        "mirrored": cands.mirrored[m, path],
+        "sample_duration": [index.groups[used[i]].duration[chosen[i]] for i in m],
         "target_cost": tc, "continuity_cost": cc, "gesture_cost": cands.gesture[m, path]})
     fallbacks = {g: r for g, (r, d) in resolved.items() if r != g}
     return SearchResult(validate_choices(choices, source="search"), total, fallbacks)
+
+
+def _add_group(cands: Candidates, targets: pd.DataFrame, rows: np.ndarray,
+               context: np.ndarray, group: str, real: str, dist: float, index: SearchIndex,
+               predictors, config: dict[str, Any]) -> None:
+    """Merge the samples of group ``real`` into the candidates of ``group``'s notes ``rows``."""
+    gi = index.groups[real]
+    pred = predictors.predict(real, context[rows]) if predictors is not None else None
+    if pred is None:
+        pred = np.broadcast_to(gi.feature_mean, (rows.size, gi.feature_mean.size))
+    flip = _parts(group)[1] != _parts(real)[1]
+    base = config["weights"]["fallback"] * dist
+    for chunk in _chunks(rows.size, len(gi)):
+        cost, cg = _target_costs(targets.iloc[rows[chunk]], pred[chunk], gi, config)
+        cands.keep(rows[chunk], cost + base, cg, gi, real, flip)
+
+
+def source_groups(resolved: dict[str, tuple[str, float]], available: list[str],
+                  config: dict[str, Any]) -> dict[str, list[tuple[str, float]]]:
+    """The groups whose samples compete for each wanted group's notes, with distances.
+
+    Each wanted group's own group (or its fallback, from :func:`resolve_groups`) first, then
+    every other available group within ``[fallback] neighbours`` (and ``max_distance``);
+    0 (off) keeps each note to its own group, as Maestre et al. (2010) search.
+
+    Examples
+    --------
+    >>> from gesture_db.search_config import load_search_config
+    >>> cfg = load_search_config()
+    >>> cfg["fallback"]["neighbours"] = 0.25
+    >>> have = ["legato-down-mid-mid", "legato-down-end-mid", "detache-down-iso-mid"]
+    >>> source_groups({"legato-down-mid-mid": ("legato-down-mid-mid", 0.0)}, have, cfg)
+    {'legato-down-mid-mid': [('legato-down-mid-mid', 0.0), ('legato-down-end-mid', 0.25)]}
+    """
+    reach = min(float(config["fallback"]["neighbours"]), config["fallback"]["max_distance"])
+    out = {}
+    for g, (real, dist) in resolved.items():
+        near = [(a, d) for a in available if a != real
+                for d in [group_distance(g, a, config)] if 0.0 < d <= reach]
+        out[g] = [(real, dist), *sorted(near, key=lambda x: (x[1], x[0]))]
+    return out
 
 
 def _resolve_or_raise(wanted: list[str], index: SearchIndex,
@@ -324,69 +363,7 @@ def _resolve_or_raise(wanted: list[str], index: SearchIndex,
     return resolved
 
 
-@dataclass
-class _Candidates:
-    """The cheapest samples of every target note (rows: notes, columns: candidates).
-
-    Attributes
-    ----------
-    target, gesture : np.ndarray [shape=(M, N)]
-        Weighted target cost (inf beyond ``n_cand``) and unweighted gesture cost.
-    index : np.ndarray [shape=(M, N)], int
-        Row of each candidate in its group's :class:`GroupIndex`.
-    n_cand : np.ndarray [shape=(M,)], int
-        Candidates per note.
-    start, end : np.ndarray [shape=(M, N, 3)]
-        Velocity (m/s, sign flipped when mirrored), force (N) and beta at each candidate's
-        start and end.
-    used : np.ndarray [shape=(M,)], object
-        Group sampled from.
-    mirrored : np.ndarray [shape=(M,)], bool
-        Whether the samples are of the other bow direction.
-    """
-
-    target: np.ndarray
-    gesture: np.ndarray
-    index: np.ndarray
-    n_cand: np.ndarray
-    start: np.ndarray
-    end: np.ndarray
-    used: np.ndarray
-    mirrored: np.ndarray
-
-    @classmethod
-    def empty(cls, n_notes: int, n_best: int) -> _Candidates:
-        """No candidates yet for ``n_notes`` notes of up to ``n_best`` candidates."""
-        shape = (n_notes, n_best)
-        return cls(np.full(shape, np.inf), np.zeros(shape), np.zeros(shape, np.int64),
-                   np.zeros(n_notes, np.int64), np.zeros((*shape, 3)), np.zeros((*shape, 3)),
-                   np.empty(n_notes, object), np.zeros(n_notes, bool))
-
-    def keep_cheapest(self, rows: np.ndarray, cost: np.ndarray, cg: np.ndarray,
-                      gi: GroupIndex, group: str, flip: bool) -> None:
-        """Keep the cheapest samples of ``group`` (index ``gi``) for the notes ``rows``.
-
-        ``cost`` and ``cg`` (rows x samples of the group) are the weighted target and the
-        gesture costs; ``flip`` mirrors the samples' velocities (other bow direction).
-        """
-        N = self.target.shape[1]
-        self.used[rows] = group
-        self.mirrored[rows] = flip
-        sign = np.array([-1.0, 1.0, 1.0]) if flip else np.ones(3)
-        k = min(N, len(gi))
-        best = np.argpartition(cost, k - 1, axis=1)[:, :k] if k < len(gi) else \
-            np.broadcast_to(np.arange(k), (rows.size, k))
-        order = np.take_along_axis(cost, best, axis=1).argsort(axis=1, kind="stable")
-        best = np.take_along_axis(best, order, axis=1)
-        self.target[rows, :k] = np.take_along_axis(cost, best, axis=1)
-        self.gesture[rows, :k] = np.take_along_axis(cg, best, axis=1)
-        self.index[rows, :k] = best
-        self.n_cand[rows] = k
-        self.start[rows, :k] = gi.start[best] * sign
-        self.end[rows, :k] = gi.end[best] * sign
-
-
-def _best_path(cands: _Candidates, targets: pd.DataFrame, config: dict[str, Any]):
+def _best_path(cands: Candidates, targets: pd.DataFrame, config: dict[str, Any]):
     """Viterbi path over the candidates, its total cost and its per-note cost parts."""
     w = config["weights"]
     link = np.r_[False, targets["run_position"].isin(["mid", "end"]).to_numpy()[1:]]
@@ -481,4 +458,4 @@ def quality_costs(quality: pd.DataFrame) -> np.ndarray:
 
 __all__ = ["EmptyGroupsError", "GroupIndex", "SearchIndex", "SearchResult",
            "build_group_index", "dynamic_costs", "edge_values", "group_distance", "quality_costs",
-           "resolve_groups", "search"]
+           "resolve_groups", "search", "source_groups"]
