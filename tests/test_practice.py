@@ -181,6 +181,15 @@ def test_practised_factor_finds_the_better_force_and_needs_evidence():
     assert practised_factor(_variants(same, strokes=MIN_STROKES))[0] == 1.0
 
 
+def test_practised_factor_keeps_each_performer_strokes_apart():
+    # The same part, seed and stroke numbers from two performers, their variants' factors
+    # swapped: every stroke of both sounded best at 1.5.
+    rules = _variants({1.0: [2], 1.5: [3]}, strokes=MIN_STROKES).assign(performer="rules")
+    sampled = _variants({1.5: [3], 1.0: [2]}, strokes=MIN_STROKES).assign(performer="sampling")
+    factor, gain = practised_factor(pd.concat([rules, sampled], ignore_index=True))
+    assert factor == 1.5 and gain > 0.3
+
+
 def _d_string_score(path):
     from music21 import dynamics, note, stream, tempo
 

@@ -110,7 +110,8 @@ def practised_factor(rows: pd.DataFrame) -> tuple[float, float]:
     ----------
     rows : pandas.DataFrame
         Practice hops of one pair (:func:`practice_hops`): ``part``, ``seed``, ``string``,
-        ``stroke``, ``variant``, ``factor``, ``teacher_label``.
+        ``stroke``, ``variant``, ``factor``, ``teacher_label`` and, optionally,
+        ``performer``.
 
     Returns
     -------
@@ -127,6 +128,8 @@ def practised_factor(rows: pd.DataFrame) -> tuple[float, float]:
     1.5
     """
     keys = ["part", "seed", "string", "stroke"]
+    if "performer" in rows:  # the rules' and the sampled strokes are different strokes
+        keys.append("performer")
     if not len(rows):
         return 1.0, 0.0
     per = (rows.assign(good=rows["teacher_label"] == 3)
