@@ -343,8 +343,9 @@ def source_groups(resolved: dict[str, tuple[str, float]], available: list[str],
     reach = min(float(config["fallback"]["neighbours"]), config["fallback"]["max_distance"])
     out = {}
     for g, (real, dist) in resolved.items():
-        near = [(a, d) for a in available if a != real
-                for d in [group_distance(g, a, config)] if 0.0 < d <= reach]
+        near = [] if reach <= 0.0 else [
+            (a, d) for a in available if a != real
+            for d in [group_distance(g, a, config)] if 0.0 < d <= reach]
         out[g] = [(real, dist), *sorted(near, key=lambda x: (x[1], x[0]))]
     return out
 

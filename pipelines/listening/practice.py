@@ -21,6 +21,7 @@ for the human of the paper.
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -366,14 +367,21 @@ def _practice_jobs(excerpts: Sequence[Excerpt], instrument: str,
     return jobs
 
 
-def _practice_job(job: tuple) -> pd.DataFrame:
+@functools.lru_cache(maxsize=2)
+def _opened(db: str):
+    """The gesture database at ``db``, opened once per worker process."""
     from pipelines.methods.sampling_db import open_database
+
+    return open_database(db)
+
+
+def _practice_job(job: tuple) -> pd.DataFrame:
     from synth.listening.classifier import load_models
 
     name, part, seed, config, models_dir, instrument, spread, variants, who, db = job
     hops = practice_part(part, config, load_models(models_dir, instrument),
                          instrument=instrument, seed=seed, spread=spread, variants=variants,
-                         database=None if db is None else open_database(db))
+                         database=None if db is None else _opened(db))
     hops.insert(0, "seed", seed)
     hops.insert(0, "performer", who)
     hops.insert(0, "part", name)
