@@ -27,7 +27,7 @@ from pipelines.methods.registry import (
     render_method,
 )
 from pipelines.reports.figures import FIGURES
-from pipelines.reports.summary import summarise
+from pipelines.reports.summary import run_label, summarise
 
 
 @dataclass(frozen=True)
@@ -129,7 +129,7 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
     """
     from pipelines.perform.config import load_config
 
-    key = {k: job[k] for k in ("excerpt", "method", "seed")}
+    key = {**{k: job[k] for k in ("excerpt", "method", "seed")}, "draw": job.get("draw", 0)}
     config = load_config()
     try:
         database = _database(job["db"], job["search_config"]) if job["needs_db"] else None
@@ -138,6 +138,8 @@ def run_job(job: dict[str, Any]) -> dict[str, Any]:
                                seed=job["seed"], sample_rate=job["sample_rate"])
         figures, notes = evaluate_output(output, sample_rate=job["sample_rate"], config=config,
                                          excerpt=job["excerpt"], seed=job["seed"])
+        for n in notes:
+            n["database"] = key["draw"]
     except ArcoError as exc:
         return {**key, "figures": {"error": str(exc)}, "notes": [], "media": None}
     except Exception as exc:  # a bug: report it with its place, keep the other renders
@@ -212,13 +214,56 @@ def _run_all(jobs: list[dict[str, Any]], workers: int, progress: bool) -> list[d
                 done.append(future.result())
                 bar.update()
     bar.close()
-    order = {(j["excerpt"], j["method"], j["seed"]): i for i, j in enumerate(jobs)}
-    return sorted(done, key=lambda r: order[(r["excerpt"], r["method"], r["seed"])])
+    order = {(j["excerpt"], j["method"], j["seed"], j["draw"]): i for i, j in enumerate(jobs)}
+    return sorted(done, key=lambda r: order[(r["excerpt"], r["method"], r["seed"], r["draw"])])
+
+
+def database_list(db: str | os.PathLike | Sequence[str | os.PathLike] | None) -> list:
+    """One gesture database or several as a list of paths (``[None]`` without one).
+
+    Examples
+    --------
+    >>> database_list(None), database_list("db"), database_list(["a", "b"])
+    ([None], ['db'], ['a', 'b'])
+    >>> database_list(["a", "a"])
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: --db a is given twice
+    """
+    if db is None:
+        return [None]
+    dbs = [str(db)] if isinstance(db, str | os.PathLike) else [str(d) for d in db]
+    for d in dbs:
+        if dbs.count(d) > 1:
+            raise ParameterError(f"--db {d} is given twice")
+    return dbs or [None]
+
+
+def _excerpts(scores: Sequence[str | os.PathLike | Excerpt], given: Excerpt) -> list[Excerpt]:
+    """Excerpt records of the scores: score files get ``given``'s selection."""
+    from dataclasses import replace
+
+    excerpts = [s if isinstance(s, Excerpt) else replace(given, name=Path(s).stem,
+                                                           path=str(s)) for s in scores]
+    names = [e.name for e in excerpts]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"scores must have distinct file names, got {names}")
+    return excerpts
+
+
+def _runs(methods: list[str], seeds: list[int], dbs: list, media_dir: str) -> list[dict]:
+    """Each method x seed, the sampling methods on each database; media for the first."""
+    return [{"method": m, "seed": s, "db": dbs[k], "draw": k,
+             "needs_db": m.startswith("sampling"),
+             "media_dir": media_dir if s == seeds[0] and k == 0 else None}
+            for m in methods for s in seeds
+            for k in (range(len(dbs)) if m.startswith("sampling") else [0])]
 
 
 def compare(scores: Sequence[str | os.PathLike | Excerpt], out_dir: str | os.PathLike, *,
             methods: list[str], seeds: int | Sequence[int] = 5,
-            db: str | os.PathLike | None = None, models: str | os.PathLike | None = None,
+            db: str | os.PathLike | Sequence[str | os.PathLike] | None = None,
+            models: str | os.PathLike | None = None,
             part: str | None = None, all_parts: bool = False,
             start_measure: int | None = None, end_measure: int | None = None,
             movement: int | None = None, sample_rate: int = 44100,
@@ -239,8 +284,12 @@ def compare(scores: Sequence[str | os.PathLike | Excerpt], out_dir: str | os.Pat
         From :data:`METHODS`.
     seeds : int or list of int
         ``N`` (seeds 0..N-1) or the seeds themselves.
-    db, models : path-like, optional
-        Gesture database and listening models (as the methods need them).
+    db : path-like or list of path-like, optional
+        Gesture database(s) of the sampling methods. With several (other draws of the
+        simulated recordings, say), sampling plays each seed on each, one bootstrap unit
+        apiece: the intervals then hold the spread of the databases' draws too.
+    models : path-like, optional
+        Listening models (as the methods need them).
     part, all_parts, start_measure, end_measure, movement
         Part, measure and movement selection of the score files, as ``arco render``.
     sample_rate : int, Hz
@@ -263,33 +312,31 @@ def compare(scores: Sequence[str | os.PathLike | Excerpt], out_dir: str | os.Pat
     from pipelines.reports.html import write_report
 
     say = log or (lambda *_: None)
-    check_methods(methods, db=db, models=models)
+    dbs = database_list(db)
+    check_methods(methods, db=dbs[0], models=models)
     seeds = seed_list(seeds)
-    excerpts = [s if isinstance(s, Excerpt) else Excerpt(
-        Path(s).stem, str(s), start_measure, end_measure, part, all_parts, movement)
-        for s in scores]
-    names = [e.name for e in excerpts]
-    if len(set(names)) != len(names):
-        raise ParameterError(f"scores must have distinct file names, got {names}")
-    needs_db = {m: m.startswith("sampling") for m in methods}
-    if any(needs_db.values()):
-        _database(db, search_config)  # a missing or bad database fails before any work
-    jobs = []
+    excerpts = _excerpts(scores, Excerpt("", "", start_measure, end_measure, part, all_parts,
+                                         movement))
+    sampled = any(m.startswith("sampling") for m in methods)
+    if sampled:
+        for d in dbs:
+            _database(d, search_config)  # a missing or bad database fails before any work
     say(f"reading {len(excerpts)} score(s)")
-    for e, (notes, parts) in zip(excerpts, _read_all(excerpts, workers), strict=True):
-        jobs += [{"excerpt": e.name, "notes": notes, "parts": parts, "method": m, "seed": s,
-                  "db": db, "models": models, "search_config": search_config,
-                  "needs_db": needs_db[m], "sample_rate": sample_rate,
-                  "media_dir": str(out_dir) if s == seeds[0] else None}
-                 for m in methods for s in seeds]
+    common = {"models": models, "search_config": search_config, "sample_rate": sample_rate}
+    jobs = [{"excerpt": e.name, "notes": notes, "parts": parts, **job, **common}
+            for e, (notes, parts) in zip(excerpts, _read_all(excerpts, workers), strict=True)
+            for job in _runs(methods, seeds, dbs, str(out_dir))]
     say(f"{len(jobs)} renders: {len(excerpts)} excerpts x {len(methods)} methods x "
-        f"{len(seeds)} seeds")
+        f"{len(seeds)} seeds" + (f" (x {len(dbs)} databases for sampling)"
+                                 if len(dbs) > 1 and sampled else ""))
     done = _run_all(jobs, workers, progress)
     for r in done:
         if "error" in r["figures"]:
-            say(f"{r['excerpt']}: {r['method']} seed {r['seed']}: error: {r['figures']['error']}")
+            say(f"{r['excerpt']}: {r['method']} seed {run_label(r['seed'], r['draw'])}: "
+                f"error: {r['figures']['error']}")
+    used = dbs if sampled and dbs[0] is not None else []
     results = summarise(done, excerpts=[e.__dict__ for e in excerpts], methods=methods,
-                        seeds=seeds, title=title)
+                        seeds=seeds, title=title, databases=used)
     write_report(results, out_dir, methods=METHODS)
     say(results["verdict"])
     return results
@@ -368,5 +415,5 @@ def heldout_excerpts(path: str | os.PathLike | None = None, data_dir=None, *,
 
 
 __all__ = ["FIGURES", "METHODS", "Excerpt", "MethodOutput", "PartOutput", "check_methods",
-           "compare", "evaluate_output", "heldout_excerpts", "render_method", "run_job",
-           "read_excerpt", "seed_list", "write_media"]
+           "compare", "database_list", "evaluate_output", "heldout_excerpts", "render_method",
+           "run_job", "read_excerpt", "seed_list", "write_media"]

@@ -1,7 +1,8 @@
 """The comparison report: ``results.json``, ``results.csv``, ``index.html``, ``intervals.png``.
 
 ``results.json`` is :func:`pipelines.reports.summary.summarise`'s output (it opens with the
-verdict). ``results.csv`` has one row per method x excerpt x seed with the scalar figures.
+verdict). ``results.csv`` has one row per method x excerpt x seed (and gesture
+``database``, an index) with the scalar figures.
 ``index.html`` opens with the verdict sentence and the why, then per figure each method's
 mean and 95 % interval with the winner where the intervals separate ("no separation"
 otherwise), the plot of the intervals, the worst notes, and per excerpt the same table
@@ -30,8 +31,10 @@ def results_frame(results: Mapping[str, Any]) -> pd.DataFrame:
     rows = []
     for method, per in results["runs"].items():
         for excerpt, by_seed in per.items():
-            for seed, figs in by_seed.items():
-                row = {"method": method, "excerpt": excerpt, "seed": int(seed)}
+            for label, figs in by_seed.items():
+                seed, _, draw = label.partition("@db")
+                row = {"method": method, "excerpt": excerpt, "seed": int(seed),
+                       "database": int(draw or 0)}
                 row.update({k: v for k, v in figs.items()
                             if isinstance(v, int | float | str) and k != "parts"})
                 rows.append(row)
@@ -111,6 +114,12 @@ def _figure_table(table: Mapping[str, Any], timing: Mapping[str, Any] | None) ->
     return out
 
 
+def _seed(note: Mapping[str, Any]) -> str:
+    """A note's seed, with its gesture database beyond the first."""
+    draw = note.get("database", 0)
+    return f"{note['seed']} (db {draw})" if draw else str(note["seed"])
+
+
 def _worst(why: Mapping[str, Any]) -> list[str]:
     esc = html.escape
     out = ["<table><tr><th>method</th><th>excerpt</th><th>seed</th><th>part</th>"
@@ -119,7 +128,7 @@ def _worst(why: Mapping[str, Any]) -> list[str]:
     for m, w in why.items():
         for n in w["worst"]:
             out.append(
-                f"<tr><td>{esc(m)}</td><td>{esc(n['excerpt'])}</td><td>{n['seed']}</td>"
+                f"<tr><td>{esc(m)}</td><td>{esc(n['excerpt'])}</td><td>{_seed(n)}</td>"
                 f"<td>{esc(n['part'])}</td><td>{n['measure']}</td><td>{esc(n['pitch'])}</td>"
                 f"<td>{esc(', '.join(n['failures']))}</td>"
                 f"<td>{esc(', '.join(n['contexts']))}</td>"
@@ -161,7 +170,9 @@ def _html(results: Mapping[str, Any], methods: Mapping[str, str], has_plot: bool
     out += _counts(results["why"])
     out += ["<ul>", *(f"<li><b>{esc(m)}</b>: {esc(methods.get(m, ''))}</li>"
                       for m in results["setup"]["methods"]), "</ul>"]
+    dbs = results["setup"].get("databases", [])
     out.append(f"<h2>All excerpts and seeds</h2><p>Seeds {results['setup']['seeds']}; "
+               + (f"gesture databases {esc(', '.join(dbs))}; " if len(dbs) > 1 else "") +
                f"{esc(results['setup']['interval'])}. A winner is named only where its "
                "interval separates from every other method's; render time is reported, not "
                "scored.</p>")

@@ -13,12 +13,14 @@ into the content of ``results.json``:
 - ``instruments``: the same per instrument (its parts' notes pooled over the excerpts),
   in order of first appearance, each with its own verdict;
 - ``timing``: method -> mean render seconds and real-time factor (reported, not scored);
-- ``runs``: method -> excerpt -> seed -> the yardstick's figures (or ``error``);
+- ``runs``: method -> excerpt -> run -> the yardstick's figures (or ``error``); a run is
+  its seed, ``"S@dbK"`` for seed S on the K-th of several gesture databases (K >= 1);
 - ``failed``: method -> its first error, for a method that failed on every excerpt (it is
   not compared); ``left_out``: excerpt -> which methods failed on it and why (such an
   excerpt is left out of the pooled figures of every method, so that all are compared on
   the same music; its own table holds the methods that played it);
-- ``setup``: excerpts, seeds, methods and how the intervals were computed;
+- ``setup``: excerpts, seeds, methods, gesture databases and how the intervals were
+  computed;
 - ``media``: method -> excerpt -> audio and bowing plot of the first seed.
 """
 
@@ -37,6 +39,26 @@ INTERVAL_TEXT = (f"{iv.LEVEL:.0%} percentile interval of a two-stage bootstrap "
                  f"({iv.N_BOOT} replicates, seed {iv.BOOTSTRAP_SEED}): seeds drawn with "
                  "replacement, then each drawn seed's notes with replacement; mean = mean "
                  "over seeds of each seed's figure over all excerpts")
+DATABASES_TEXT = ("; with several gesture databases each sampling seed on each database is "
+                  "one unit of the draw, so the sampling intervals hold the databases' "
+                  "spread too")
+
+
+def run_label(seed: int, draw: int = 0) -> str:
+    """The key of one run in ``runs``: its seed, with its database beyond the first.
+
+    Examples
+    --------
+    >>> run_label(3), run_label(3, 2)
+    ('3', '3@db2')
+    """
+    return str(seed) if draw == 0 else f"{seed}@db{draw}"
+
+
+def _units(done: list[dict], method: str, seeds: list[int]) -> list[tuple[int, int]]:
+    """The bootstrap's units of a method: each seed on each database it was played on."""
+    draws = sorted({r.get("draw", 0) for r in done if r["method"] == method}) or [0]
+    return [(s, d) for s in seeds for d in draws]
 
 
 def _intervals(done: list[dict], methods: list[str], seeds: list[int],
@@ -46,8 +68,9 @@ def _intervals(done: list[dict], methods: list[str], seeds: list[int],
     out: dict[str, dict[str, iv.Interval]] = {f: {} for f in FIGURES}
     for m in methods:
         per_seed = []
-        for s in seeds:
+        for s, d in _units(done, m, seeds):
             notes = [n for r in done if r["method"] == m and r["seed"] == s
+                     and r.get("draw", 0) == d
                      and (excerpt is None or r["excerpt"] == excerpt) for n in r["notes"]
                      if instrument is None or n.get("instrument") == instrument]
             per_seed.append(iv.note_arrays(notes))
@@ -80,23 +103,25 @@ def _timing(done: list[dict], methods: list[str]) -> dict[str, dict[str, float]]
 
 
 def _per_instrument(good: list[dict], methods: list[str], seeds: list[int],
-                    n_excerpts: int) -> dict[str, dict[str, Any]]:
+                    n_excerpts: int, n_databases: int) -> dict[str, dict[str, Any]]:
     """Per instrument, in order of first appearance: its verdict and its table."""
     out = {}
     for i in dict.fromkeys(n["instrument"] for r in good for n in r["notes"]
                            if n.get("instrument")):
         ivs = _intervals(good, methods, seeds, instrument=i)
         out[i] = {"verdict": verdict_sentence(ivs, n_excerpts=n_excerpts, n_seeds=len(seeds),
-                                              instrument=i), **_table(ivs)}
+                                              instrument=i, n_databases=n_databases),
+                  **_table(ivs)}
     return out
 
 
 def _runs_and_media(done: list[dict], methods: list[str]) -> tuple[dict, dict]:
-    """The runs (method -> excerpt -> seed -> figures) and the first seed's media."""
+    """The runs (method -> excerpt -> run label -> figures) and the first seed's media."""
     runs: dict[str, dict[str, dict[str, Any]]] = {m: {} for m in methods}
     media: dict[str, dict[str, Any]] = {m: {} for m in methods}
     for r in done:
-        runs[r["method"]].setdefault(r["excerpt"], {})[str(r["seed"])] = r["figures"]
+        label = run_label(r["seed"], r.get("draw", 0))
+        runs[r["method"]].setdefault(r["excerpt"], {})[label] = r["figures"]
         if r["media"]:
             media[r["method"]][r["excerpt"]] = r["media"]
     return runs, media
@@ -114,21 +139,35 @@ def _failures(done: list[dict], methods: list[str], names: list[str]):
     return errors, failed, left_out
 
 
+def _verdict(pooled, n_excerpts: int, n_seeds: int, n_databases: int,
+             left_out: dict[str, str], failed: dict[str, str]) -> str:
+    """The verdict sentence, with what was left out in brackets."""
+    verdict = verdict_sentence(pooled, n_excerpts=n_excerpts, n_seeds=n_seeds,
+                               n_databases=n_databases)
+    notes = [f"{e} left out, {msg}" for e, msg in left_out.items()]
+    notes += [f"{m} not compared: {msg}" for m, msg in failed.items()]
+    return verdict[:-1] + f" ({'; '.join(notes)})." if notes else verdict
+
+
 def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
-              methods: list[str], seeds: list[int], title: str | None = None
-              ) -> dict[str, Any]:
+              methods: list[str], seeds: list[int], title: str | None = None,
+              databases: Sequence[str] = ()) -> dict[str, Any]:
     """The comparison's results (see the module doc) from its finished jobs.
 
     Parameters
     ----------
     done : list of dict
         :func:`pipelines.reports.compare.run_job` results: ``excerpt``, ``method``,
-        ``seed``, ``figures`` (or ``{"error": ...}``), ``notes`` (annotated), ``media``.
+        ``seed``, ``draw`` (index in ``databases``; 0 when absent), ``figures`` (or
+        ``{"error": ...}``), ``notes`` (annotated), ``media``.
     excerpts : sequence of dict
         What was played (``name``, ``path``, measures, parts).
     methods : list of str
     seeds : list of int
     title : str, optional
+    databases : sequence of str
+        The gesture databases the sampling methods played (recorded in ``setup``; with
+        several, each seed on each database is one unit of the bootstrap).
 
     Returns
     -------
@@ -165,14 +204,11 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
         played = [m for m in ok if (m, e) not in errors]
         per_excerpt[e] = _table(_intervals([r for r in done if r["method"] in played],
                                            played, seeds, e))
-    per_instrument = _per_instrument(good, ok, seeds, len(names) - len(left_out))
+    n_db = len(databases)
+    per_instrument = _per_instrument(good, ok, seeds, len(names) - len(left_out), n_db)
     runs, media = _runs_and_media(done, methods)
-    verdict = verdict_sentence(pooled, n_excerpts=len(names) - len(left_out),
-                               n_seeds=len(seeds))
-    notes = [f"{e} left out, {msg}" for e, msg in left_out.items()]
-    notes += [f"{m} not compared: {msg}" for m, msg in failed.items()]
-    if notes:
-        verdict = verdict[:-1] + f" ({'; '.join(notes)})."
+    verdict = _verdict(pooled, len(names) - len(left_out), len(seeds), n_db, left_out,
+                       failed)
     return {
         "title": title or ", ".join(names),
         "verdict": verdict,
@@ -186,10 +222,12 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
         "failed": failed,
         "left_out": left_out,
         "setup": {"excerpts": list(excerpts), "seeds": seeds, "methods": methods,
-                  "interval": INTERVAL_TEXT, "level": iv.LEVEL, "n_boot": iv.N_BOOT,
+                  "databases": list(databases),
+                  "interval": INTERVAL_TEXT + (DATABASES_TEXT if n_db > 1 else ""),
+                  "level": iv.LEVEL, "n_boot": iv.N_BOOT,
                   "bootstrap_seed": iv.BOOTSTRAP_SEED},
         "media": media,
     }
 
 
-__all__ = ["INTERVAL_TEXT", "summarise"]
+__all__ = ["DATABASES_TEXT", "INTERVAL_TEXT", "run_label", "summarise"]

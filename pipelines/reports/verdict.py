@@ -58,7 +58,7 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
                      headline: Sequence[str] = ("helmholtz_share", "attack_ms_p90",
                                                 "sustained_class3_share",
                                                 "sustained_class5_share"),
-                     instrument: str | None = None) -> str:
+                     instrument: str | None = None, n_databases: int = 1) -> str:
     """One sentence: who beats whom on the headline figures, and what does not separate.
 
     A method beats the others on a figure when its interval separates from every other
@@ -78,6 +78,9 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
         The figures the sentence speaks of (in this order).
     instrument : str, optional
         The summary holds only this instrument's parts ("On the cello parts of ...").
+    n_databases : int
+        Gesture databases the sampling methods played on (named in the sentence when
+        there are several).
 
     Examples
     --------
@@ -115,6 +118,8 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
         clauses.append(f"{_join(who)} do not separate on {_join(figs)}")
     plural = "s" if n_seeds != 1 else ""
     head = f"On {n_excerpts} excerpt{'s' if n_excerpts != 1 else ''} x {n_seeds} seed{plural}"
+    if n_databases > 1:
+        head += f" (x {n_databases} gesture databases for sampling)"
     if instrument:
         head = f"On the {instrument} parts of {head[3:]}"
     if not clauses:
@@ -228,7 +233,8 @@ def why(notes: Sequence[Mapping[str, Any]], *, worst: int = 5) -> dict[str, Any]
             "by_failure": {f: by_failure.get(f, 0) for f in FAILURES},
             "by_context": {c: by_context.get(c, 0) for c in CONTEXTS},
             "notes_by_context": {c: in_context.get(c, 0) for c in CONTEXTS},
-            "worst": [{k: n[k] for k in keys} for n in sorted(failing, key=badness)[:worst]]}
+            "worst": [{**{k: n[k] for k in keys}, "database": n.get("database", 0)}
+                      for n in sorted(failing, key=badness)[:worst]]}
 
 
 def why_sentence(method: str, w: Mapping[str, Any]) -> str:

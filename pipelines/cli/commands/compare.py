@@ -41,7 +41,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="with --heldout: only the first M measures of each excerpt")
     p.add_argument("--methods", default=DEFAULT_METHODS,
                    help="comma-separated methods (arco render --help lists them)")
-    p.add_argument("--db", metavar="DB", help="gesture database (sampling methods)")
+    p.add_argument("--db", metavar="DB", action="append",
+                   help="gesture database (sampling methods); give it again for more "
+                        "databases (other draws): sampling is played on each and the "
+                        "intervals pool them")
     p.add_argument("--models", metavar="DIR", help="listening models (feedback, sampling)")
     p.add_argument("--search-config", metavar="SEARCH.toml",
                    help="sample-search weights merged over the shipped defaults")
