@@ -14,7 +14,8 @@ into the content of ``results.json``:
   in order of first appearance, each with its own verdict;
 - ``timing``: method -> mean render seconds and real-time factor (reported, not scored);
 - ``runs``: method -> excerpt -> run -> the yardstick's figures (or ``error``); a run is
-  its seed, ``"S@dbK"`` for seed S on the K-th of several gesture databases (K >= 1);
+  its seed on the first gesture database, ``"S@dbK"`` for seed S on database K (counted
+  from 0 in ``setup["databases"]``);
 - ``failed``: method -> its first error, for a method that failed on every excerpt (it is
   not compared); ``left_out``: excerpt -> which methods failed on it and why (such an
   excerpt is left out of the pooled figures of every method, so that all are compared on
