@@ -24,6 +24,7 @@ from pipelines.methods.registry import (
     MethodOutput,
     PartOutput,
     check_methods,
+    get_method,
     render_method,
 )
 from pipelines.reports.figures import FIGURES
@@ -253,11 +254,15 @@ def _excerpts(scores: Sequence[str | os.PathLike | Excerpt], given: Excerpt) -> 
 
 def _runs(methods: list[str], seeds: list[int], dbs: list, media_dir: str) -> list[dict]:
     """Each method x seed, the sampling methods on each database; media for the first."""
-    return [{"method": m, "seed": s, "db": dbs[k], "draw": k,
-             "needs_db": m.startswith("sampling"),
+    return [{"method": m, "seed": s, "db": dbs[k], "draw": k, "needs_db": _needs_db(m),
              "media_dir": media_dir if s == seeds[0] and k == 0 else None}
             for m in methods for s in seeds
-            for k in (range(len(dbs)) if m.startswith("sampling") else [0])]
+            for k in (range(len(dbs)) if _needs_db(m) else [0])]
+
+
+def _needs_db(method: str) -> bool:
+    """Whether the registered ``method`` plays from a gesture database."""
+    return get_method(method, option="--methods").needs_db
 
 
 def compare(scores: Sequence[str | os.PathLike | Excerpt], out_dir: str | os.PathLike, *,
@@ -317,7 +322,7 @@ def compare(scores: Sequence[str | os.PathLike | Excerpt], out_dir: str | os.Pat
     seeds = seed_list(seeds)
     excerpts = _excerpts(scores, Excerpt("", "", start_measure, end_measure, part, all_parts,
                                          movement))
-    sampled = any(m.startswith("sampling") for m in methods)
+    sampled = any(_needs_db(m) for m in methods)
     if sampled:
         for d in dbs:
             _database(d, search_config)  # a missing or bad database fails before any work

@@ -24,6 +24,7 @@ import pandas as pd
 from data_schemas.io import atomic_path
 from pipelines.reports.figures import FIGURES, LABELS, REPORTED
 from pipelines.reports.json_safe import json_safe
+from pipelines.reports.summary import split_run_label
 
 
 def results_frame(results: Mapping[str, Any]) -> pd.DataFrame:
@@ -32,9 +33,8 @@ def results_frame(results: Mapping[str, Any]) -> pd.DataFrame:
     for method, per in results["runs"].items():
         for excerpt, by_seed in per.items():
             for label, figs in by_seed.items():
-                seed, _, draw = label.partition("@db")
-                row = {"method": method, "excerpt": excerpt, "seed": int(seed),
-                       "database": int(draw or 0)}
+                seed, draw = split_run_label(label)
+                row = {"method": method, "excerpt": excerpt, "seed": seed, "database": draw}
                 row.update({k: v for k, v in figs.items()
                             if isinstance(v, int | float | str) and k != "parts"})
                 rows.append(row)

@@ -56,6 +56,18 @@ def run_label(seed: int, draw: int = 0) -> str:
     return str(seed) if draw == 0 else f"{seed}@db{draw}"
 
 
+def split_run_label(label: str) -> tuple[int, int]:
+    """The seed and database index of a :func:`run_label`.
+
+    Examples
+    --------
+    >>> split_run_label("3"), split_run_label("3@db2")
+    ((3, 0), (3, 2))
+    """
+    seed, _, draw = label.partition("@db")
+    return int(seed), int(draw or 0)
+
+
 def _units(done: list[dict], method: str, seeds: list[int]) -> list[tuple[int, int]]:
     """The bootstrap's units of a method: each seed on each database it was played on."""
     draws = sorted({r.get("draw", 0) for r in done if r["method"] == method}) or [0]
@@ -231,4 +243,4 @@ def summarise(done: list[dict[str, Any]], *, excerpts: Sequence[dict[str, Any]],
     }
 
 
-__all__ = ["DATABASES_TEXT", "INTERVAL_TEXT", "run_label", "summarise"]
+__all__ = ["DATABASES_TEXT", "INTERVAL_TEXT", "run_label", "split_run_label", "summarise"]
