@@ -23,7 +23,7 @@ MAX_N_BEST = 1024
 #: Largest weight, scale or distance accepted (a sane bound, far above any useful value).
 MAX_VALUE = 1e6
 #: Settings that are lists of instrument names, not numbers.
-NAME_LISTS = ("render.bite", "render.limit_acceleration")
+NAME_LISTS = ("render.bite", "render.limit_acceleration", "render.pressing_limit")
 
 
 @lru_cache(maxsize=1)

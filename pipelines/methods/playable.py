@@ -21,11 +21,16 @@ is recorded (the ``force_factor`` column of the sample choices).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pandas as pd
 
 from data_schemas.actions import ACTIONS
 from data_schemas.errors import ParameterError
+
+if TYPE_CHECKING:
+    from pipelines.methods.pressing import PressingLimit
 
 #: Frames whose bow speed is at least this share of the note's fastest are its sustained
 #: part, on which the note's force ratio is measured.
@@ -38,6 +43,11 @@ MAX_FACTOR = 4.0
 #: Neighbouring notes' factors are blended over this time (s), so a slur's force stays
 #: continuous across a finger change.
 BLEND = 0.03
+#: Under a pressing limit a note keeps the band's force for this long (s) after its start,
+#: then moves to the limited force over :data:`ATTACK_RELEASE` s: the attack needs the
+#: force (a lighter start is slower on this model), the sustain must not sound flat.
+ATTACK_HOLD = 0.1
+ATTACK_RELEASE = 0.05
 
 
 def window_middle(reference_force: np.ndarray | float, bow_velocity: np.ndarray | float,
@@ -92,7 +102,8 @@ def _note_of_rows(actions: pd.DataFrame, targets: pd.DataFrame) -> np.ndarray:
 
 
 def note_force_factors(actions: pd.DataFrame, targets: pd.DataFrame,
-                       reference_forces: np.ndarray, band: float) -> np.ndarray:
+                       reference_forces: np.ndarray, band: float,
+                       limit: PressingLimit | None = None) -> np.ndarray:
     """The force factor that brings each target note into the playable band.
 
     Parameters
@@ -106,13 +117,17 @@ def note_force_factors(actions: pd.DataFrame, targets: pd.DataFrame,
     band : float
         Allowed ratio (>= 1) of a note's sustained force to :func:`window_middle`, either
         way.
+    limit : PressingLimit, optional
+        The instrument's pressing limit (:mod:`pipelines.methods.pressing`): the band's top
+        is at most the limit at the note's string and median sustained speed and beta.
 
     Returns
     -------
     np.ndarray [shape=(len(targets),)]
-        ``clip(q, 1 / band, band) / q`` with ``q`` the median ratio over the note's sustained
-        frames, limited to ``[1 / MAX_FACTOR, MAX_FACTOR]``; 1 for notes without frames or
-        whose bow stays below :data:`MOVING`.
+        ``clip(q, 1 / band, top) / q`` with ``q`` the median ratio over the note's
+        sustained frames and ``top`` the band (or the limit, if lower), limited to
+        ``[1 / MAX_FACTOR, MAX_FACTOR]``; 1 for notes without frames or whose bow stays
+        below :data:`MOVING`.
 
     Raises
     ------
@@ -121,16 +136,18 @@ def note_force_factors(actions: pd.DataFrame, targets: pd.DataFrame,
     """
     _check_band(band)
     return _factors(actions, _note_of_rows(actions, targets), len(targets), reference_forces,
-                    band)
+                    band, limit)
 
 
 def _factors(actions: pd.DataFrame, note: np.ndarray, n_notes: int,
-             reference_forces: np.ndarray, band: float) -> np.ndarray:
+             reference_forces: np.ndarray, band: float,
+             limit: PressingLimit | None = None) -> np.ndarray:
     """:func:`note_force_factors` from each row's note (``_note_of_rows``)."""
     v = np.abs(actions["bow_velocity"].to_numpy(np.float64))
+    string = actions["string"].to_numpy(int)
+    beta = actions["beta"].to_numpy(np.float64)
     ratio = actions["bow_force"].to_numpy(np.float64) / window_middle(
-        np.asarray(reference_forces)[actions["string"].to_numpy(int)], v,
-        actions["beta"].to_numpy(np.float64))
+        np.asarray(reference_forces)[string], v, beta)
     factors = np.ones(n_notes)
     for m in np.unique(note[note >= 0]):
         rows = note == m
@@ -138,8 +155,13 @@ def _factors(actions: pd.DataFrame, note: np.ndarray, n_notes: int,
             continue
         sustained = v[rows] >= SUSTAIN_SHARE * v[rows].max()
         q = float(np.median(ratio[rows][sustained]))
+        top = band
+        if limit is not None:
+            where = [np.bincount(string[rows][sustained]).argmax()]
+            top = min(band, float(limit(np.array(where), np.median(v[rows][sustained])[None],
+                                        np.median(beta[rows][sustained])[None])[0]))
         if q > 0:
-            factors[m] = np.clip(np.clip(q, 1.0 / band, band) / q, 1.0 / MAX_FACTOR, MAX_FACTOR)
+            factors[m] = np.clip(np.clip(q, 1.0 / band, top) / q, 1.0 / MAX_FACTOR, MAX_FACTOR)
     return factors
 
 
@@ -158,12 +180,13 @@ def _blended(times: np.ndarray, values: np.ndarray, counted: np.ndarray,
 
 
 def into_playable(actions: pd.DataFrame, targets: pd.DataFrame, reference_forces: np.ndarray,
-                  band: float) -> tuple[pd.DataFrame, np.ndarray]:
+                  band: float, limit: PressingLimit | None = None
+                  ) -> tuple[pd.DataFrame, np.ndarray]:
     """Scale each sampled note's bow force into the playable band.
 
     Parameters
     ----------
-    actions, targets, reference_forces, band
+    actions, targets, reference_forces, band, limit
         As for :func:`note_force_factors`; ``actions`` sorted by time.
 
     Returns
@@ -171,8 +194,10 @@ def into_playable(actions: pd.DataFrame, targets: pd.DataFrame, reference_forces
     actions : pandas.DataFrame
         A copy whose bowed rows carry the scaled force (blended over :data:`BLEND` s
         between notes; clipped to the actions table's maximum); plucks and lifts untouched.
+        Under a ``limit``, each note's first :data:`ATTACK_HOLD` s keep the band's factor
+        and move to the limited one over :data:`ATTACK_RELEASE` s.
     factors : np.ndarray [shape=(len(targets),)]
-        The factor of each target note (1 = untouched).
+        The factor of each target note's sustained part (1 = untouched).
 
     Examples
     --------
@@ -186,29 +211,47 @@ def into_playable(actions: pd.DataFrame, targets: pd.DataFrame, reference_forces
     """
     _check_band(band)
     note = _note_of_rows(actions, targets)
-    factors = _factors(actions, note, len(targets), reference_forces, band)
+    factors = _factors(actions, note, len(targets), reference_forces, band, limit)
+    per_row = _row_factors(actions, note, factors)
+    if limit is not None:
+        banded = _row_factors(actions, note, _factors(actions, note, len(targets),
+                                                      reference_forces, band))
+        onset = targets["onset"].to_numpy(np.float64)
+        since = actions["time"].to_numpy(np.float64) - onset[np.maximum(note, 0)]
+        w = np.clip((since - ATTACK_HOLD) / ATTACK_RELEASE, 0.0, 1.0)
+        per_row = (1.0 - w) * banded + w * per_row
     out = actions.copy()
-    if np.all(factors == 1.0):
+    if np.all(per_row == 1.0):
         return out, factors
+    force = actions["bow_force"].to_numpy(np.float64)
+    out["bow_force"] = np.where(note >= 0, np.clip(force * per_row, 0.0,
+                                                   ACTIONS.column("bow_force").maximum), force)
+    return out, factors
+
+
+def _row_factors(actions: pd.DataFrame, note: np.ndarray, factors: np.ndarray) -> np.ndarray:
+    """Each row's factor: its note's, blended over :data:`BLEND` s (1 outside notes)."""
     rows = note >= 0
     per_row = np.where(rows, factors[np.maximum(note, 0)], 1.0)
+    if np.all(per_row == 1.0):
+        return per_row
     times = actions["time"].to_numpy(np.float64)
     order = np.argsort(times, kind="stable")
     blended = np.empty_like(per_row)
     blended[order] = _blended(times[order], per_row[order], rows[order], BLEND)
-    force = actions["bow_force"].to_numpy(np.float64)
-    out["bow_force"] = np.where(rows, np.clip(force * blended, 0.0,
-                                              ACTIONS.column("bow_force").maximum), force)
-    return out, factors
+    return np.where(rows, blended, 1.0)
 
 
 def to_playable(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.DataFrame,
                 instrument: str, search_config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     """:func:`into_playable` with the search settings' ``[render] playable_band``.
 
-    Returns the transformed actions and a copy of ``choices`` with the ``force_factor`` of
-    each note (all 1 when the band is 0: the transform is off).
+    Under the instrument's pressing limit when ``[render] pressing_limit`` names it
+    (:func:`pipelines.methods.pressing.pressing_limit`). Returns the transformed actions and
+    a copy of ``choices`` with the ``force_factor`` of each note (all 1 when the band is 0:
+    the transform is off).
     """
+    from pipelines.methods.pressing import pressing_limit
     from synth.strings import reference_forces
 
     band = playable_band(search_config)
@@ -216,13 +259,15 @@ def to_playable(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.DataFr
     if band == 0.0:
         choices["force_factor"] = 1.0
         return actions, choices
-    actions, factors = into_playable(actions, targets, reference_forces(instrument), band)
+    actions, factors = into_playable(actions, targets, reference_forces(instrument), band,
+                                     pressing_limit(instrument, search_config))
     choices["force_factor"] = factors[choices["target_index"].to_numpy(int)]
     return actions, choices
 
 
 def loop_range(planned: np.ndarray, bow_velocity: np.ndarray, beta: np.ndarray,
-               reference_forces: np.ndarray, band: float) -> tuple[np.ndarray, np.ndarray]:
+               reference_forces: np.ndarray, band: float,
+               limit: PressingLimit | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Per-hop force range of a listening loop that corrects sampled forces.
 
     The loop may move a hop's force anywhere inside the playable band, but not further out
@@ -238,11 +283,16 @@ def loop_range(planned: np.ndarray, bow_velocity: np.ndarray, beta: np.ndarray,
     reference_forces : np.ndarray [shape=(n_strings,)], N
     band : float
         As for :func:`note_force_factors` (>= 1).
+    limit : PressingLimit, optional
+        The instrument's pressing limit: the band's top at each hop is at most the limit at
+        its bowing (the loop heard wispy hops better than flat ones and pressed sampled
+        cello notes flat at the band's top).
 
     Returns
     -------
     lowest, highest : np.ndarray [shape=(n, n_strings)], N
-        ``min(planned, F_mid / band)`` and ``max(planned, F_mid band)``.
+        ``min(planned, F_mid / band)`` and ``max(planned, F_mid top)``, ``top`` the band or
+        the limit where it is lower.
 
     Examples
     --------
@@ -254,8 +304,14 @@ def loop_range(planned: np.ndarray, bow_velocity: np.ndarray, beta: np.ndarray,
     _check_band(band)
     middle = window_middle(np.asarray(reference_forces)[None, :], bow_velocity, beta)
     planned = np.asarray(planned, np.float64)
-    return np.minimum(planned, middle / band), np.maximum(planned, middle * band)
+    top = np.full(middle.shape, float(band))
+    if limit is not None:
+        strings = np.broadcast_to(np.arange(middle.shape[1])[None, :], middle.shape)
+        top = np.minimum(band, limit(strings.ravel(), np.ravel(bow_velocity),
+                                     np.ravel(beta)).reshape(middle.shape))
+    return np.minimum(planned, middle / band), np.maximum(planned, middle * top)
 
 
-__all__ = ["BLEND", "MAX_FACTOR", "MOVING", "SUSTAIN_SHARE", "into_playable", "loop_range",
-           "note_force_factors", "playable_band", "to_playable", "window_middle"]
+__all__ = ["ATTACK_HOLD", "ATTACK_RELEASE", "BLEND", "MAX_FACTOR", "MOVING", "SUSTAIN_SHARE",
+           "into_playable", "loop_range", "note_force_factors", "playable_band", "to_playable",
+           "window_middle"]

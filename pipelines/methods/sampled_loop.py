@@ -63,19 +63,21 @@ def sampled_plan(perf: Performance, instrument: str, *, config: dict | None = No
     return dataclasses.replace(plan, target_speed=target_speed), span, force
 
 
-def _loop_range(plan, sampled: np.ndarray, instrument: str,
-                band: float) -> tuple[np.ndarray, np.ndarray] | None:
+def _loop_range(plan, sampled: np.ndarray, instrument: str, band: float,
+                limit=None) -> tuple[np.ndarray, np.ndarray] | None:
     """The loop's per-hop force range inside the playable band (None: band 0, off)."""
     from synth.strings import reference_forces
 
     if band == 0.0:
         return None
-    return loop_range(sampled, plan.velocity, plan.beta, reference_forces(instrument), band)
+    return loop_range(sampled, plan.velocity, plan.beta, reference_forces(instrument), band,
+                      limit)
 
 
 def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrument: str,
                   sample_rate: int = 44100, seed: int = 0, engine: str = "modal",
-                  band: float = 0.0) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame]:
+                  band: float = 0.0, limit=None
+                  ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame]:
     """Play sampled actions with the listening controller correcting the force hop by hop.
 
     The single integration point with :mod:`synth.listening.controller`: the hop plan of the
@@ -101,6 +103,8 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
         Synthesis engine that plays (:func:`synth.engines.get_engine`; default ``modal``).
     band : float
         Playable band: no hop's force leaves it further than sampled (0: off; ``loop_range``).
+    limit : pipelines.methods.pressing.PressingLimit, optional
+        The instrument's pressing limit: the band's top at most the limit at each hop.
 
     Returns
     -------
@@ -131,7 +135,8 @@ def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrumen
     inst = get_engine(engine, instrument, sample_rate=sample_rate, seed=seed)
     log = play_plan(plan, models, inst, rng=np.random.default_rng([seed, 2]),
                     settings=FEEDBACK_SETTINGS, record_diagnostics=True,
-                    planned_force=sampled, force_range=_loop_range(plan, sampled, instrument, band))
+                    planned_force=sampled,
+                    force_range=_loop_range(plan, sampled, instrument, band, limit))
     tail = inst.process(int(TAIL * sample_rate), {}).audio
     played = played_actions(perf, plan, span, log, sample_rate=sample_rate)
     y = np.concatenate([log.audio, tail]).astype(np.float32)

@@ -30,6 +30,7 @@ from data_schemas.instruments import finger_ratio, instrument_facts, limits
 from data_schemas.sampling import validate_targets
 from gesture_db.groups import chain_positions
 from pipelines.methods.playable import playable_band, to_playable
+from pipelines.methods.pressing import pressing_limit
 from pipelines.methods.result import PartRender, RenderResult, mix
 from pipelines.methods.sampled_bite import bite_chosen
 from pipelines.methods.sampled_bow import assembly_options
@@ -382,7 +383,8 @@ def _play(part: SampledPart, models: str | os.PathLike | None, *, sample_rate: i
     if models is not None:
         y, played, diag = correct_force(perf, models, instrument=part.instrument,
                                         sample_rate=sample_rate, seed=seed, engine=engine,
-                                        band=playable_band(search or {}))
+                                        band=playable_band(search or {}),
+                                        limit=pressing_limit(part.instrument, search or {}))
         part.audio = y
         part.extras["sampled_actions"] = perf.actions
         part.performance = Performance(played, perf.events, perf.warnings)
