@@ -16,7 +16,9 @@ with ``F_ref`` the string's reference force (the window's middle at 0.3 m/s and 
 ``synth/config/strings.toml``). The window's edges scale as F_min ~ v / beta^2 and F_max ~
 v / beta, so F_mid is their geometric middle at any bowing; the rules' bow lanes sit on it
 at every dynamic (``data_schemas/config/instruments.toml``). The factor applied to each note
-is recorded (the ``force_factor`` column of the sample choices).
+is recorded (the ``force_factor`` column of the sample choices). Where the instrument's
+pressing limit (:mod:`pipelines.methods.pressing`) lies below the band's top, the note's
+sustained force stays under it and its first :data:`ATTACK_HOLD` s keep the band's force.
 """
 
 from __future__ import annotations

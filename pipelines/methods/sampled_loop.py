@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -21,6 +22,9 @@ from data_schemas.errors import ParameterError
 from pipelines.methods.playable import loop_range
 from pipelines.perform.config import load_config
 from pipelines.perform.events import Performance
+
+if TYPE_CHECKING:
+    from pipelines.methods.pressing import PressingLimit
 
 
 def sampled_plan(perf: Performance, instrument: str, *, config: dict | None = None,
@@ -64,7 +68,7 @@ def sampled_plan(perf: Performance, instrument: str, *, config: dict | None = No
 
 
 def _loop_range(plan, sampled: np.ndarray, instrument: str, band: float,
-                limit=None) -> tuple[np.ndarray, np.ndarray] | None:
+                limit: PressingLimit | None = None) -> tuple[np.ndarray, np.ndarray] | None:
     """The loop's per-hop force range inside the playable band (None: band 0, off)."""
     from synth.strings import reference_forces
 
@@ -76,7 +80,7 @@ def _loop_range(plan, sampled: np.ndarray, instrument: str, band: float,
 
 def correct_force(perf: Performance, models_dir: str | os.PathLike, *, instrument: str,
                   sample_rate: int = 44100, seed: int = 0, engine: str = "modal",
-                  band: float = 0.0, limit=None
+                  band: float = 0.0, limit: PressingLimit | None = None
                   ) -> tuple[np.ndarray, pd.DataFrame, pd.DataFrame]:
     """Play sampled actions with the listening controller correcting the force hop by hop.
 
