@@ -174,7 +174,7 @@ def test_the_loop_range_top_is_the_band_or_the_limit(planned, v, beta):
 
 def test_the_search_settings_name_the_instruments():
     config = load_search_config()
-    assert config["render"]["pressing_limit"] == ["cello"]
+    assert config["render"]["pressing_limit"] == ["cello", "viola"]
     assert pressing_limit("violin", config) is None
     assert isinstance(pressing_limit("cello", config), PressingLimit)
     with pytest.raises(ParameterError, match="render.pressing_limit"):
