@@ -179,3 +179,13 @@ def test_the_search_settings_name_the_instruments():
     assert isinstance(pressing_limit("cello", config), PressingLimit)
     with pytest.raises(ParameterError, match="render.pressing_limit"):
         load_search_config(overrides={"render": {"pressing_limit": ["banjo"]}})
+
+
+def test_a_part_without_sampled_notes_is_returned_unchanged():
+    refs = reference_forces("cello")
+    limit = PressingLimit(_table(np.full((2, 3), 1.2)), "cello")
+    actions, _ = _note(0.5, 3.0)
+    empty = pd.DataFrame({"onset": np.zeros(0), "duration": np.zeros(0)})
+    out, f = into_playable(actions, empty, refs, 1.5, limit)
+    assert f.size == 0
+    pd.testing.assert_frame_equal(out, actions)

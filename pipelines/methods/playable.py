@@ -97,6 +97,8 @@ def _note_of_rows(actions: pd.DataFrame, targets: pd.DataFrame) -> np.ndarray:
     onset = targets["onset"].to_numpy(np.float64)
     end = onset + targets["duration"].to_numpy(np.float64)
     t = actions["time"].to_numpy(np.float64)
+    if onset.size == 0:
+        return np.full(t.shape, -1)
     note = np.searchsorted(onset, t, side="right") - 1
     inside = (note >= 0) & (t < end[np.maximum(note, 0)] + 1e-9)
     bowed = ~actions["pluck"].to_numpy(bool) & (actions["bow_force"].to_numpy() > 0)
@@ -214,6 +216,9 @@ def into_playable(actions: pd.DataFrame, targets: pd.DataFrame, reference_forces
     _check_band(band)
     note = _note_of_rows(actions, targets)
     factors = _factors(actions, note, len(targets), reference_forces, band, limit)
+    out = actions.copy()
+    if np.all(factors == 1.0):  # then the band alone moves no note either
+        return out, factors
     per_row = _row_factors(actions, note, factors)
     if limit is not None:
         banded = _row_factors(actions, note, _factors(actions, note, len(targets),
@@ -222,9 +227,6 @@ def into_playable(actions: pd.DataFrame, targets: pd.DataFrame, reference_forces
         since = actions["time"].to_numpy(np.float64) - onset[np.maximum(note, 0)]
         w = np.clip((since - ATTACK_HOLD) / ATTACK_RELEASE, 0.0, 1.0)
         per_row = (1.0 - w) * banded + w * per_row
-    out = actions.copy()
-    if np.all(per_row == 1.0):
-        return out, factors
     force = actions["bow_force"].to_numpy(np.float64)
     out["bow_force"] = np.where(note >= 0, np.clip(force * per_row, 0.0,
                                                    ACTIONS.column("bow_force").maximum), force)
@@ -235,8 +237,6 @@ def _row_factors(actions: pd.DataFrame, note: np.ndarray, factors: np.ndarray) -
     """Each row's factor: its note's, blended over :data:`BLEND` s (1 outside notes)."""
     rows = note >= 0
     per_row = np.where(rows, factors[np.maximum(note, 0)], 1.0)
-    if np.all(per_row == 1.0):
-        return per_row
     times = actions["time"].to_numpy(np.float64)
     order = np.argsort(times, kind="stable")
     blended = np.empty_like(per_row)
