@@ -14,7 +14,7 @@ the window is narrower). The table goes to ``pipelines/methods/pressing_limits.p
 (:data:`data_schemas.pressing.PRESSING_LIMITS`) with the hash of the string physics.
 
 ``--json`` prints one JSON object (per instrument and string, the limit at beta 0.08 and
-0.18 and at 0.1 and 0.3 m/s); progress goes to stderr. About 2 minutes on two cores.
+0.18 and at 0.1 and 0.3 m/s); progress goes to stderr. About 45 s on two cores.
 """
 
 from __future__ import annotations
