@@ -135,6 +135,12 @@ def pressing_limit(instrument: str, search_config: dict) -> PressingLimit | None
     """
     if instrument not in search_config.get("render", {}).get("pressing_limit", []):
         return None
+    return _shipped_limit(instrument)
+
+
+@lru_cache(maxsize=8)
+def _shipped_limit(instrument: str) -> PressingLimit:
+    """The shipped table's limit, built once per process (every part and judged sample asks)."""
     return PressingLimit(load_pressing_limits(), instrument)
 
 
