@@ -24,7 +24,7 @@ from pipelines.perform.bow_speed import limit_acceleration, stroke_acceleration
 from pipelines.perform.config import bow_force, dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
-from pipelines.perform.note_shape import dynamic_at, note_beta, note_force
+from pipelines.perform.note_shape import dynamic_at, note_beta, note_force, slowing_floor
 from pipelines.perform.ornaments import ornament_cents
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
@@ -282,6 +282,9 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                                         plain and string not in sounding)
                      for string in {*e.strings, *(r[0] for r in e.roll)}}
             beta = note_beta(e, t, config, s.beta_scale)
+            # kept off the bridge: the force follows the window's middle (F ~ beta^-1.5)
+            lighter = slowing_floor(e, t, config, s.beta_scale) ** -1.5
+            force = {string: f * lighter for string, f in force.items()}
             n_roll = len(e.roll)
             sustain_from = e.t0 + n_roll * roll_time
             for j_roll, (string, semis) in enumerate(e.roll):

@@ -121,7 +121,7 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
     "frames": {"interval": 0.1},
     "bow": {"max_acceleration": 100.0, "short_stroke_acceleration": 100.0,
             "min_speed_scale": 1.0, "max_speed_scale": 10.0, "retake_gap": 10.0,
-            "region_span": 1.0},
+            "region_span": 1.0, "slowed_min_beta": 0.45},
     "articulations": {"*": 10.0, "bite_force": 4.0, "bite_hold": 1.0, "bite_time": 1.0},
     "techniques": {"*": 10.0},
     "instruments": {"bow_length": 1.5},
@@ -199,7 +199,7 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
     _validate_bow_force(config, source)
     _positive(config, "frames", "interval", source)
     for key in ("max_acceleration", "short_stroke_acceleration", "min_speed_scale",
-                "max_speed_scale", "retake_gap", "region_span"):
+                "max_speed_scale", "retake_gap", "region_span", "slowed_min_beta"):
         _positive(config, "bow", key, source)
     margin = config["bow"]["margin"]
     if not _is_number(margin) or not 0 <= margin < 0.5:

@@ -90,9 +90,37 @@ def note_force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float, in
     return force
 
 
+def slowing_floor(e: Event, t: np.ndarray, config: dict[str, Any],
+                  scale: float) -> np.ndarray:
+    """Factor (>= 1) on a slowed stroke's ``beta`` that keeps it off the bridge.
+
+    A stroke slowed to fit the bow plays nearer the bridge (``scale`` < 1 on the lane's
+    beta), but not nearer than ``[bow] slowed_min_beta`` (nor than its lane, when the lane
+    itself is nearer): there the heavy strings of the model sound flat even at the middle
+    of their Helmholtz window.
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import load_config
+    >>> e = Event(t0=0.0, end=1.0, strings=[1], semitones=[0.0], rows=[0], label="D4",
+    ...           dynamic=5.0)
+    >>> cfg = load_config()
+    >>> float(slowing_floor(e, np.array([0.5]), cfg, 0.5)[0] * 0.1 * 0.5)  # mf lane 0.1
+    0.08
+    >>> float(slowing_floor(e, np.array([0.5]), cfg, 0.9)[0])
+    1.0
+    """
+    lane = dynamic_table(config, "beta", dynamic_at(e, t))
+    if scale >= 1.0:
+        return np.ones_like(lane)
+    floor = np.minimum(lane, config["bow"]["slowed_min_beta"])
+    return np.maximum(1.0, floor / (lane * scale))
+
+
 def note_beta(e: Event, t: np.ndarray, config: dict[str, Any], scale: float = 1.0) -> np.ndarray:
     """Contact point beta (bow-bridge distance / string length) of ``e`` at times ``t`` (s)."""
     beta = dynamic_table(config, "beta", dynamic_at(e, t)) * scale
+    beta = beta * slowing_floor(e, t, config, scale)
     if e.technique == "sul_ponticello":
         beta = beta * config["techniques"]["sul_ponticello_beta"]
     elif e.technique == "sul_tasto":
