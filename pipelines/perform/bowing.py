@@ -226,7 +226,8 @@ def _play_stroke(s: Stroke, scale: float, position: float, budget: BowBudget) ->
         # A player who must slow the bow plays nearer the bridge, and a little heavier
         # for the bow speed (F_max ~ v / beta, F_min ~ v / beta^2): beta * sqrt(s) and
         # force * s^(1/4) halve the loudness lost (a 1 s f note on the violin A string
-        # at s 0.7 / 0.5 / 0.35: -1.3 / -2.6 / -5.1 dB instead of -3.0 / -5.9 / -8.9).
+        # at s 0.7 / 0.5 / 0.35: -1.3 / -2.6 / -5.1 dB instead of -3.0 / -5.9 / -8.9, before
+        # [bow] slowed_min_beta kept beta off the bridge: note_shape.slowing_floor).
         kept = float(np.clip(scale, 0.1, 2.0))
         s.force_scale, s.beta_scale = kept ** 0.25, kept ** 0.5
     run = np.concatenate([[0.0], np.cumsum(np.diff(s.t) * (s.speed[1:] + s.speed[:-1]) / 2)])
