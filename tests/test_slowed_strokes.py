@@ -90,3 +90,11 @@ def test_the_setting_is_checked():
     bad["bow"]["slowed_min_beta"] = 0.0
     with pytest.raises(ParameterError, match="bow.slowed_min_beta"):
         validate_config(bad, "my.toml")
+
+
+def test_harmonics_keep_their_own_placement():
+    harmonic = Event(t0=0.0, end=1.0, strings=[1], semitones=[12.0], rows=[0], label="G3",
+                     dynamic=5.0, touch=True, node=2)
+    assert float(slowing_floor(harmonic, np.array([0.5]), CFG, 0.25)[0]) == 1.0
+    plain = float(slowing_floor(_event(5.0), np.array([0.5]), CFG, 0.25)[0])
+    assert plain == pytest.approx(0.08 / (0.1 * 0.25))  # the mf lane: beta 0.1

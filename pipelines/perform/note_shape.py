@@ -97,7 +97,7 @@ def slowing_floor(e: Event, t: np.ndarray, config: dict[str, Any],
     A stroke slowed to fit the bow plays nearer the bridge (``scale`` < 1 on the lane's
     beta), but not nearer than ``[bow] slowed_min_beta`` (nor than its lane, when the lane
     itself is nearer): there the heavy strings of the model sound flat even at the middle
-    of their Helmholtz window.
+    of their Helmholtz window. Harmonics keep their own placement (1 for ``e.node``).
 
     Examples
     --------
@@ -111,7 +111,7 @@ def slowing_floor(e: Event, t: np.ndarray, config: dict[str, Any],
     1.0
     """
     lane = dynamic_table(config, "beta", dynamic_at(e, t))
-    if scale >= 1.0:
+    if scale >= 1.0 or e.node:
         return np.ones_like(lane)
     floor = np.minimum(lane, config["bow"]["slowed_min_beta"])
     return np.maximum(1.0, floor / (lane * scale))
