@@ -13,7 +13,8 @@ velocity and beta, the largest force (a multiple of the window's middle) below e
 that sounds flat; the table ships as ``pressing_limits.parquet`` beside this module
 (:data:`data_schemas.pressing.PRESSING_LIMITS`). :func:`pressing_limit` reads it for one
 instrument; gesture sampling's playable transform and its loop keep sampled forces under it
-(:mod:`pipelines.methods.playable`).
+(:mod:`pipelines.methods.playable`), and so do the rules' notes
+(:func:`pipelines.perform.note_shape.pressing_cap`).
 """
 
 from __future__ import annotations
@@ -135,14 +136,20 @@ def pressing_limit(instrument: str, search_config: dict) -> PressingLimit | None
     """
     if instrument not in search_config.get("render", {}).get("pressing_limit", []):
         return None
-    return _shipped_limit(instrument)
+    return shipped_limit(instrument)
 
 
 @lru_cache(maxsize=8)
-def _shipped_limit(instrument: str) -> PressingLimit:
-    """The shipped table's limit, built once per process (every part and judged sample asks)."""
+def shipped_limit(instrument: str) -> PressingLimit:
+    """The shipped table's limit, built once per process (every part and judged sample asks).
+
+    Examples
+    --------
+    >>> shipped_limit("viola") is shipped_limit("viola")
+    True
+    """
     return PressingLimit(load_pressing_limits(), instrument)
 
 
 __all__ = ["FLOOR", "PressingLimit", "TABLE_PATH", "load_pressing_limits", "pressing_key",
-           "pressing_limit"]
+           "pressing_limit", "shipped_limit"]

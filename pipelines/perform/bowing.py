@@ -24,7 +24,13 @@ from pipelines.perform.bow_speed import limit_acceleration, stroke_acceleration
 from pipelines.perform.config import bow_force, dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
-from pipelines.perform.note_shape import dynamic_at, note_beta, note_force, slowing_floor
+from pipelines.perform.note_shape import (
+    dynamic_at,
+    note_beta,
+    note_force,
+    pressing_cap,
+    slowing_floor,
+)
 from pipelines.perform.ornaments import ornament_cents
 
 _COLUMNS = ("time", "string", "finger_ratio", "bow_force", "bow_velocity", "beta",
@@ -275,17 +281,9 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
                 t = np.append(t, seg_end - _TICK)
             speed = np.interp(t, s.t, s.speed)
             pos = np.interp(t, s.t, s.position)
-            # The bow catches each string the stroke starts on or crosses to (not one
-            # already sounding in a slur, nor under grace or ornament notes: a light bow).
             sounding = set(events[s.events[j - 1]].strings) if j else set()
-            plain = e.ornament is None and not e.grace
-            force = {string: note_force(e, t, config, s.force_scale, instrument, string,
-                                        plain and string not in sounding)
-                     for string in {*e.strings, *(r[0] for r in e.roll)}}
             beta = note_beta(e, t, config, s.beta_scale)
-            # kept off the bridge: the force follows the window's middle (F ~ beta^-1.5)
-            lighter = slowing_floor(e, t, config, s.beta_scale) ** -1.5
-            force = {string: f * lighter for string, f in force.items()}
+            force = _note_forces(e, t, speed, beta, s, sounding, config, instrument)
             n_roll = len(e.roll)
             sustain_from = e.t0 + n_roll * roll_time
             for j_roll, (string, semis) in enumerate(e.roll):
@@ -319,6 +317,27 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
     table = pd.DataFrame({c: np.concatenate([r[c] for r in rows]) for c in _COLUMNS})
     table = _prepare_attacks(table)
     return table.sort_values("time", kind="stable").reset_index(drop=True)[list(_COLUMNS)]
+
+
+def _note_forces(e: Event, t: np.ndarray, speed: np.ndarray, beta: np.ndarray, s: Stroke,
+                 sounding: set[int], config: dict[str, Any],
+                 instrument: str) -> dict[int, np.ndarray]:
+    """Bow force (N) of ``e`` at times ``t`` on each string it bows.
+
+    The bow catches each string the stroke starts on or crosses to (not one already sounding
+    in a slur, nor under grace or ornament notes: a light bow); a slowed stroke kept off the
+    bridge keeps its force at the window's middle (F ~ beta^-1.5); no string but a
+    harmonic's is pressed past its pressing limit (:func:`note_shape.pressing_cap`).
+    """
+    plain = e.ornament is None and not e.grace
+    lighter = slowing_floor(e, t, config, s.beta_scale) ** -1.5
+    out = {}
+    for string in {*e.strings, *(r[0] for r in e.roll)}:
+        force = note_force(e, t, config, s.force_scale, instrument, string,
+                           plain and string not in sounding) * lighter
+        out[string] = force if e.node else pressing_cap(force, speed, beta, string,
+                                                        instrument, config)
+    return out
 
 
 def _rows(t: np.ndarray, string: int, semis: float, force: np.ndarray, velocity: np.ndarray,

@@ -204,6 +204,10 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
     margin = config["bow"]["margin"]
     if not _is_number(margin) or not 0 <= margin < 0.5:
         raise ParameterError(f"{source}: bow.margin={margin!r} must be in [0, 0.5)")
+    names = config["bow"]["pressing_limit"]
+    if not isinstance(names, list) or not set(names) <= set(INSTRUMENT_NAMES):
+        raise ParameterError(f"{source}: bow.pressing_limit={names!r} must be a list of "
+                             f"instrument names ({', '.join(INSTRUMENT_NAMES)})")
     for key in config["articulations"]:
         _positive(config, "articulations", key, source)
     for key in config["techniques"]:

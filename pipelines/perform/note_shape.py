@@ -2,8 +2,9 @@
 
 The force comes from the rules' newton table at the note's dynamic, shaped by the bite at a
 stroke's start or a change of string (:func:`bite`), the technique, double stops,
-harmonics, accents and the lightening before a break; beta from the dynamic's lane, the
-technique and a harmonic's segment. :mod:`pipelines.perform.bowing` writes them into the
+harmonics, accents and the lightening before a break, and kept under the string's pressing
+limit (:func:`pressing_cap`); beta from the dynamic's lane, the technique and a harmonic's
+segment. :mod:`pipelines.perform.bowing` writes them into the
 actions table.
 """
 
@@ -130,3 +131,61 @@ def note_beta(e: Event, t: np.ndarray, config: dict[str, Any], scale: float = 1.
         harm = config["harmonics"]
         beta = np.maximum(beta * harm["segment_beta"] / e.node, harm["min_beta"])
     return np.clip(beta, 0.02, 0.45)
+
+
+def pressing_cap(force: np.ndarray, speed: np.ndarray, beta: np.ndarray, string: int,
+                 instrument: str, config: dict[str, Any]) -> np.ndarray:
+    """A note's bow force on one string, kept under the string's pressing limit (N).
+
+    Pressed above its pressing limit (:mod:`pipelines.methods.pressing`) a string of the
+    model sounds flat, and further above it raucous or below its pitch; the bite and the
+    accents of the rules took the heavy strings of the viola and cello there. For the
+    instruments in ``[bow] pressing_limit`` each frame's force is at most the limit times
+    the middle of the window (:func:`pipelines.methods.playable.window_middle`), both at the
+    note's sustained bow speed (median over the frames at least half as fast as its
+    fastest, so a stroke's turn keeps the note's cap) and the frame's beta. A note whose
+    bow never moves is left as it is.
+
+    Parameters
+    ----------
+    force : np.ndarray [shape=(n,)], N
+        The note's force on ``string`` at its frames.
+    speed : np.ndarray [shape=(n,)], m/s
+        Bow speed at the same frames (its magnitude counts).
+    beta : np.ndarray [shape=(n,)]
+        Bow-bridge distance / string length at the same frames.
+    string : int
+        String index, 0 = lowest.
+    instrument : str
+    config : dict
+        Rules configuration.
+
+    Returns
+    -------
+    np.ndarray [shape=(n,)], N
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import load_config
+    >>> from pipelines.methods.playable import window_middle
+    >>> from synth.strings import reference_forces
+    >>> middle = window_middle(reference_forces("viola")[0], 0.29, 0.11)
+    >>> capped = pressing_cap(np.full(3, 1.7 * middle), np.full(3, 0.29), np.full(3, 0.11),
+    ...                       0, "viola", load_config())
+    >>> bool(1.0 < capped[0] / middle < 1.7)
+    True
+    """
+    from pipelines.methods.playable import MOVING, SUSTAIN_SHARE, window_middle
+    from pipelines.methods.pressing import shipped_limit
+    from synth.strings import reference_forces
+
+    speed = np.abs(np.asarray(speed, np.float64))
+    if instrument not in config["bow"]["pressing_limit"] or not speed.size \
+            or speed.max() < MOVING:
+        return force
+    held = float(np.median(speed[speed >= SUSTAIN_SHARE * speed.max()]))
+    beta = np.asarray(beta, np.float64)
+    top = shipped_limit(instrument)(np.full(beta.shape, string), np.full(beta.shape, held),
+                                    beta)
+    return np.minimum(force, top * window_middle(reference_forces(instrument)[string], held,
+                                                 beta))
