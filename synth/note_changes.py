@@ -89,10 +89,30 @@ def reversal_speed(t: float, bow_velocity: float, acceleration: float) -> float:
     return float(np.clip(bow_velocity - acceleration * t, -bow_velocity, bow_velocity))
 
 
-def _play(instrument: str | InstrumentConstants, string: int, beta: float, seed: int,
-          duration: float, control: Callable[[Instrument, float], BowControl]
-          ) -> tuple[np.ndarray, float]:
-    """Slip onsets (s) over ``duration`` and the open string's nominal frequency (Hz)."""
+def slip_onsets(instrument: str | InstrumentConstants, string: int, seed: int, duration: float,
+                control: Callable[[Instrument, float], BowControl]
+                ) -> tuple[np.ndarray, float]:
+    """Bow one string of a fresh instrument (no body) by ``control``; its slip onsets.
+
+    Parameters
+    ----------
+    instrument : str or InstrumentConstants
+    string : int
+        String index, 0 = lowest.
+    seed : int
+        Seed of the instrument (its friction noise).
+    duration : float, s
+    control : callable
+        ``control(instrument, t)`` -> :class:`synth.controls.BowControl` at the end of each
+        block of :data:`HOP` samples ending at ``t`` s.
+
+    Returns
+    -------
+    onsets : np.ndarray [shape=(k,)], s
+        Slip onsets of the string (the instrument's contact diagnostics).
+    f0 : float, Hz
+        The open string's nominal frequency.
+    """
     inst = Instrument(instrument, seed=seed, body=None)
     rate = inst.sample_rate
     onsets = []
@@ -103,8 +123,8 @@ def _play(instrument: str | InstrumentConstants, string: int, beta: float, seed:
     return np.concatenate(onsets), float(f0)
 
 
-def _measure(onsets: np.ndarray, before: float, after: float, change: float,
-             attack_from: float | None = None) -> NoteChange:
+def measure_change(onsets: np.ndarray, before: float, after: float, change: float,
+                   attack_from: float | None = None) -> NoteChange:
     """Helmholtz motion before ``change``, and the attack from ``attack_from``.
 
     ``before`` and ``after`` are the nominal frequencies (Hz) before and after the change;
@@ -172,8 +192,8 @@ def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force:
         return BowControl(reversal_speed(t - CHANGE_AT, bow_velocity, acceleration),
                           bow_force, beta)
 
-    onsets, f0 = _play(instrument, string, beta, seed, turn + LIMIT, control)
-    return _measure(onsets, f0, f0, CHANGE_AT, turn)
+    onsets, f0 = slip_onsets(instrument, string, seed, turn + LIMIT, control)
+    return measure_change(onsets, f0, f0, CHANGE_AT, turn)
 
 
 def finger_change(instrument: str | InstrumentConstants, string: int, *, bow_force: float,
@@ -207,8 +227,9 @@ def finger_change(instrument: str | InstrumentConstants, string: int, *, bow_for
         speed, force = _setup(bite, bow_force, bow_velocity, t)
         return BowControl(speed, force, beta, ratio if t > CHANGE_AT else 0.0)
 
-    onsets, f0 = _play(instrument, string, beta, seed, CHANGE_AT + LIMIT, control)
-    return _measure(onsets, f0, f0 / (1.0 - ratio), CHANGE_AT)
+    onsets, f0 = slip_onsets(instrument, string, seed, CHANGE_AT + LIMIT, control)
+    return measure_change(onsets, f0, f0 / (1.0 - ratio), CHANGE_AT)
 
 
-__all__ = ["NoteChange", "bow_change", "finger_change", "reversal_speed"]
+__all__ = ["NoteChange", "bow_change", "finger_change", "measure_change", "reversal_speed",
+           "slip_onsets"]

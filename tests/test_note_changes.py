@@ -34,7 +34,7 @@ def test_attack_is_timed_to_the_first_of_five_regular_periods():
     regular = _train(period, 20, change + 0.010)
     extra = np.array([change + 0.0125])                     # breaks the 2nd period
     onsets = np.sort(np.concatenate([before[before < change], messy, regular, extra]))
-    got = nc._measure(onsets, 1 / period, 1 / period, change)
+    got = nc.measure_change(onsets, 1 / period, 1 / period, change)
     # runs of 5 regular intervals: the first starts at the onset after the extra slip
     assert got.helmholtz_before
     assert got.attack == pytest.approx(0.010 + period, abs=1e-12)
@@ -42,12 +42,12 @@ def test_attack_is_timed_to_the_first_of_five_regular_periods():
 
 def test_no_attack_when_the_periods_never_settle():
     onsets = np.sort(np.concatenate([_train(0.004, 60, 0.5), 0.8 + _train(0.0021, 100)]))
-    got = nc._measure(onsets, 250.0, 250.0, 0.8)
+    got = nc.measure_change(onsets, 250.0, 250.0, 0.8)
     assert got.attack is None and got.helmholtz_before
 
 
 def test_a_silent_string_has_no_attack_and_no_helmholtz_motion():
-    got = nc._measure(np.array([0.1, 0.2]), 250.0, 250.0, 0.8)
+    got = nc.measure_change(np.array([0.1, 0.2]), 250.0, 250.0, 0.8)
     assert got == nc.NoteChange(False, None)
 
 
