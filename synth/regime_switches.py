@@ -11,7 +11,8 @@ depends on how it got there. :func:`regime_switch` measures it on the block API 
 2. at :data:`PULSE_AT` the force is pushed to ``pulse`` x for :data:`PULSE_TIME` s (a bump
    of the arm); the regime is read again before :data:`RELIEF_AT`;
 3. at :data:`RELIEF_AT` the force is eased to ``relief`` x for ``relief_time`` s (a player
-   lightening the bow; ``relief=1`` leaves it alone); the regime is read from
+   lightening the bow; ``relief=1`` leaves it alone, above 1 the bow is pressed harder
+   instead); the regime is read from
    :data:`SETTLE` s after the relief's end, over :data:`WINDOW` s.
 
 The regime is the slip count per nominal period of the open string (the instrument's slip
@@ -47,6 +48,8 @@ RELIEF_AT = 1.0
 WINDOW = 0.2
 #: Time after the relief's end before the last window, s.
 SETTLE = 0.3
+#: Largest relief factor (above 1 the bow is pressed harder instead of eased).
+MAX_RELIEF = 4.0
 #: Slips per period within this of 1 read as Helmholtz motion.
 HELMHOLTZ_TOLERANCE = 0.15
 
@@ -86,11 +89,12 @@ def _check(bow_force: float, bow_velocity: float, beta: float, pulse: float, rel
     if not (bow_force > 0.0 and bow_velocity > 0.0 and 0.0 < beta < 0.5):
         raise ParameterError(f"need bow_force > 0 N, bow_velocity > 0 m/s and 0 < beta < 0.5;"
                              f" got {bow_force}, {bow_velocity}, {beta}")
-    if not (pulse > 0.0 and 0.0 <= relief <= 1.0 and 0.0 < relief_time <= 0.5):
-        raise ParameterError(f"need pulse > 0, 0 <= relief <= 1 and 0 < relief_time <= 0.5 s;"
-                             f" got {pulse}, {relief}, {relief_time}")
-    if bow_force * max(pulse, 1.0) > 50.0:
-        raise ParameterError(f"bow_force={bow_force} N x pulse={pulse} exceeds 50 N")
+    if not (pulse > 0.0 and 0.0 <= relief <= MAX_RELIEF and 0.0 < relief_time <= 0.5):
+        raise ParameterError(f"need pulse > 0, 0 <= relief <= {MAX_RELIEF:g} and 0 < "
+                             f"relief_time <= 0.5 s; got {pulse}, {relief}, {relief_time}")
+    if bow_force * max(pulse, relief, 1.0) > 50.0:
+        raise ParameterError(f"bow_force={bow_force} N x pulse={pulse} or relief={relief} "
+                             f"exceeds 50 N")
 
 
 def regime_switch(instrument: str, string: int, *, bow_force: float, bow_velocity: float,
@@ -110,7 +114,8 @@ def regime_switch(instrument: str, string: int, *, bow_force: float, bow_velocit
     pulse : float
         Force factor of the bump (1: none).
     relief : float
-        Force factor while the bow is eased, 0..1 (1: no relief).
+        Force factor while the bow is eased, 0..:data:`MAX_RELIEF` (1: no relief; above
+        1 the bow is pressed harder).
     relief_time : float, s
     seed : int
         Seed of the instrument.
@@ -138,5 +143,5 @@ def regime_switch(instrument: str, string: int, *, bow_force: float, bow_velocit
                         measure_change(onsets, f0, f0, relief_end).attack)
 
 
-__all__ = ["ACCELERATION", "HELMHOLTZ_TOLERANCE", "PULSE_AT", "PULSE_TIME", "RELIEF_AT",
-           "RegimeSwitch", "SETTLE", "WINDOW", "regime_switch"]
+__all__ = ["ACCELERATION", "HELMHOLTZ_TOLERANCE", "MAX_RELIEF", "PULSE_AT", "PULSE_TIME",
+           "RELIEF_AT", "RegimeSwitch", "SETTLE", "WINDOW", "regime_switch"]

@@ -32,6 +32,12 @@ def test_easing_the_bow_brings_helmholtz_motion_back():
     assert r.attack is not None and r.attack < 0.1
 
 
+def test_pressing_harder_does_not_end_it():
+    """1.5 x the force for 0.1 s instead of easing: still two slips a period."""
+    r = rs.regime_switch("cello", 2, relief=1.5, relief_time=0.1, **CELLO_D)
+    assert r.after_relief == pytest.approx(2.0, abs=0.05)
+
+
 def test_easing_leaves_helmholtz_motion_alone():
     """Without the bump the string stays in Helmholtz motion through the relief."""
     r = rs.regime_switch("violin", 1, bow_force=1.5, bow_velocity=0.3, beta=0.1, pulse=1.0)
@@ -54,10 +60,11 @@ def test_a_regular_train_counts_one_slip_a_period(f0, phase):
 @pytest.mark.parametrize("kw, match", [
     (dict(bow_force=0.0), "bow_force > 0"),
     (dict(beta=0.6), "beta < 0.5"),
-    (dict(relief=1.5), "relief <= 1"),
+    (dict(relief=4.5), "relief <= 4"),
     (dict(relief_time=0.0), "relief_time"),
     (dict(pulse=-1.0), "pulse > 0"),
     (dict(bow_force=30.0, pulse=2.0), "exceeds 50 N"),
+    (dict(bow_force=20.0, pulse=1.0, relief=3.0), "exceeds 50 N"),
 ])
 def test_bad_settings_are_refused(kw, match):
     args = {**CELLO_D, **kw}
