@@ -112,6 +112,13 @@ def slip_onsets(instrument: str | InstrumentConstants, string: int, seed: int, d
         Slip onsets of the string (the instrument's contact diagnostics).
     f0 : float, Hz
         The open string's nominal frequency.
+
+    Examples
+    --------
+    >>> onsets, f0 = slip_onsets("violin", 1, 0, 0.5, lambda inst, t: BowControl(
+    ...     min(5.0 * t, 0.3), 1.5, 0.1))
+    >>> round(f0, 1), bool(abs(np.sum(onsets > 0.3) / (0.2 * f0) - 1.0) < 0.05)
+    (293.7, True)
     """
     inst = Instrument(instrument, seed=seed, body=None)
     rate = inst.sample_rate
@@ -127,8 +134,29 @@ def measure_change(onsets: np.ndarray, before: float, after: float, change: floa
                    attack_from: float | None = None) -> NoteChange:
     """Helmholtz motion before ``change``, and the attack from ``attack_from``.
 
-    ``before`` and ``after`` are the nominal frequencies (Hz) before and after the change;
-    ``attack_from`` (s) defaults to ``change``.
+    Parameters
+    ----------
+    onsets : np.ndarray [shape=(k,)], s
+        Slip onsets of the string, increasing (:func:`slip_onsets`).
+    before, after : float, Hz
+        Nominal frequencies before and after the change.
+    change : float, s
+        Time of the change; Helmholtz motion is checked over the :data:`CHECKED` s before.
+    attack_from : float, optional, s
+        Where the attack is timed from (default ``change``).
+
+    Returns
+    -------
+    NoteChange
+        The attack runs to the first of :data:`ATTACK_PERIODS` regular periods within
+        :data:`LIMIT` s (None when there is none).
+
+    Examples
+    --------
+    >>> onsets = np.r_[np.arange(0.6, 0.8, 0.004), 0.8 + 0.01 + np.arange(30) * 0.004]
+    >>> c = measure_change(onsets, 250.0, 250.0, 0.8)
+    >>> c.helmholtz_before, round(c.attack, 4)
+    (True, 0.01)
     """
     pre = onsets[(onsets >= change - CHECKED) & (onsets < change)]
     ok = np.abs(np.diff(pre) * before - 1.0) < PERIOD_TOLERANCE

@@ -75,7 +75,13 @@ class RegimeSwitch:
 
     @staticmethod
     def helmholtz(slips_per_period: float) -> bool:
-        """Whether a slip rate (per period) reads as Helmholtz motion."""
+        """Whether a slip rate (per period) reads as Helmholtz motion.
+
+        Examples
+        --------
+        >>> RegimeSwitch.helmholtz(1.1), RegimeSwitch.helmholtz(2.0)
+        (True, False)
+        """
         return abs(slips_per_period - 1.0) <= HELMHOLTZ_TOLERANCE
 
 
@@ -123,6 +129,12 @@ def regime_switch(instrument: str, string: int, *, bow_force: float, bow_velocit
     Returns
     -------
     RegimeSwitch
+
+    Examples
+    --------
+    >>> r = regime_switch("cello", 2, bow_force=0.57, bow_velocity=0.12, beta=0.165)
+    >>> round(r.after_pulse), round(r.after_relief), r.attack < 0.05
+    (2, 1, True)
     """
     _check(bow_force, bow_velocity, beta, pulse, relief, relief_time)
     relief_end = RELIEF_AT + relief_time
