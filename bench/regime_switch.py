@@ -78,8 +78,12 @@ def run(task: tuple) -> dict:
 
 
 def summary(rows: list[dict]) -> dict:
-    """Counts of each outcome, and the median attack after the relief (ms) of the set-ups
-    slipping several times a period before it that would stay so left alone."""
+    """Counts of each outcome of ``rows`` (the bench's rows), and one median attack.
+
+    ``attack_ms_median_eased`` is over the set-ups that slip several times a period before
+    the relief and would stay so left alone: from the relief's end, ms (None when over half
+    of them never come back).
+    """
     from synth.regime_switches import RegimeSwitch
 
     helm = RegimeSwitch.helmholtz

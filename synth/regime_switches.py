@@ -12,8 +12,8 @@ depends on how it got there. :func:`regime_switch` measures it on the block API 
    of the arm); the regime is read again before :data:`RELIEF_AT`;
 3. at :data:`RELIEF_AT` the force is eased to ``relief`` x for ``relief_time`` s (a player
    lightening the bow; ``relief=1`` leaves it alone, above 1 the bow is pressed harder
-   instead); the regime is read from
-   :data:`SETTLE` s after the relief's end, over :data:`WINDOW` s.
+   instead); the regime is read from :data:`SETTLE` s after the relief's end, over
+   :data:`WINDOW` s.
 
 The regime is the slip count per nominal period of the open string (the instrument's slip
 record): 1 in Helmholtz motion, about 2 or 3 in double or triple slipping. The attack after
