@@ -56,7 +56,14 @@ TAIL = 1.0  # s of ring-out after the last hop
 #: (seeds 0 and 1) it took Helmholtz share 0.897 -> 0.914 and class 3 0.823 -> 0.849, but on
 #: the full held-out protocol (6 excerpts x 5 seeds) feedback read 0.912 (0.929 without),
 #: class 3 0.872 (0.883), attack p90 114 ms (106) (README, "The law only lightens").
-FEEDBACK_SETTINGS = ControllerSettings(range_margin=0.0, trim=1.5, sure=0.85)
+#: ``ease_crossings`` (thirty-second session): once per stroke, after 6 hops in a row whose
+#: zero crossings reach 9.7 per period of the expected pitch, the bow is eased to 0.3x for
+#: 17 hops; on the modal string that ends multiple slipping inside the Helmholtz window and
+#: leaves Helmholtz motion alone (``bench/regime_switch.py``). Chosen on Bridge No. 2, Elgar
+#: op. 83 and Mayer (a sampled cello note double-slipped for 4.7 s there) and the rules'
+#: tuning set; README, "Multiple slipping is a second steady regime".
+FEEDBACK_SETTINGS = ControllerSettings(range_margin=0.0, trim=1.5, sure=0.85,
+                                       ease_crossings=9.7)
 
 
 def lane_of(level: np.ndarray) -> np.ndarray:

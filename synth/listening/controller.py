@@ -30,7 +30,8 @@ from synth.controls import Block, BowControl
 from synth.engines import Engine
 from synth.listening.classifier import PairModel
 from synth.listening.controller_settings import ControllerSettings
-from synth.listening.feature_spec import COL_APERIODICITY
+from synth.listening.easing import Easing, crossings_per_period
+from synth.listening.feature_spec import COL_APERIODICITY, COL_ZCR
 from synth.listening.features import HOP, StreamingFeatures, yin_window_for
 from synth.listening.law import correction
 
@@ -61,6 +62,8 @@ class ForceController:
         self._last_speed = 0.0
         self._hops = 0
         self._quiet = 0
+        s = self.settings
+        self.easing = Easing(s.ease_crossings, s.ease_after, s.ease_factor, s.ease_hops)
         self.set_model(model, K=K)
 
     def set_model(self, model: PairModel, *, K: float | None = None) -> None:
@@ -82,6 +85,23 @@ class ForceController:
         self._recent.clear()
         self._hops = 0
         self._quiet = 0
+        self.easing.reset()
+
+    def listening(self) -> bool:
+        """Whether the law may act on this hop's class (past the grace and quiet hops)."""
+        return self._hops > self.settings.grace_hops and self._quiet < 0
+
+    def hear_crossings(self, crossings: float | None) -> None:
+        """Count the hop's zero crossings per period (None: nothing heard); ease if due.
+
+        While eased the law rests, and it listens again ``change_hops`` after the easing
+        (the analysis window still holds the eased sound).
+        """
+        if not self.settings.ease_crossings:
+            return
+        if self.easing.hear(crossings if self.listening() else None):
+            self._recent.clear()
+            self._quiet = self.settings.ease_hops + self.settings.change_hops
 
     def finger_changed(self) -> None:
         """A new note inside the stroke: forget what was heard, listen ``change_hops``."""
@@ -119,7 +139,7 @@ class ForceController:
         c = 0
         self._hops += 1
         self._quiet -= 1
-        settled = self._hops > s.grace_hops and self._quiet < 0
+        settled = self.listening()
         if features is not None:
             probabilities, c = self.predict.probabilities(features)
             if settled:
@@ -328,6 +348,9 @@ class _HopLoop:
                 self.draw += 1
             else:
                 self.classes[i] = ctl.step(self.features.get(s), speed, self.target_speed[i])
+        feats = self.features.get(s)
+        ctl.hear_crossings(None if feats is None else crossings_per_period(
+            feats[COL_ZCR], self.sample_rate, self.expected_f0[i]))
 
     def controls(self, k: int) -> dict[int, BowControl]:
         """Bowing of every bowed string at the end of hop ``k`` (logged)."""
@@ -346,6 +369,7 @@ class _HopLoop:
             ratio = float(finger_ratio(semitones[i]))
             force = ctl.played if planned is None else min(max(planned[i] * ctl.played,
                                                                self.lowest[i]), self.highest[i])
+            force *= ctl.easing.factor
             controls[s] = BowControl(v, force, self.beta[i], min(ratio, 0.8))
             self.force_log[i] = force
             self.vel_log[i] = v

@@ -58,6 +58,17 @@ class ControllerSettings:
     periodic_gate : float
         No correction while the window's YIN aperiodicity is below this: a periodic sound
         is left alone whatever the classifier says (0: off).
+    ease_crossings : float
+        Zero crossings per period of the expected pitch that, heard on ``ease_after`` hops
+        in a row once the law may act, ease the bow once per stroke
+        (:mod:`synth.listening.easing`; 0: off).
+    ease_after : int
+        Hops in a row with that many crossings before the bow is eased.
+    ease_factor : float
+        Force factor while eased (multiple slipping ends, Helmholtz motion stays:
+        ``bench/regime_switch.py``).
+    ease_hops : int
+        Hops the bow stays eased (17: 0.1 s at 44.1 kHz).
     """
 
     average: int = 3
@@ -73,6 +84,10 @@ class ControllerSettings:
     sure: float = 0.0
     practised_start: bool = False
     periodic_gate: float = 0.0
+    ease_crossings: float = 0.0
+    ease_after: int = 6
+    ease_factor: float = 0.3
+    ease_hops: int = 17
 
     def __post_init__(self) -> None:
         if 0.0 < self.trim_up < 1.0:

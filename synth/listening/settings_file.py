@@ -37,6 +37,10 @@ RANGES: dict[str, dict[str, tuple[type, float, float]]] = {
         "sure": (float, 0.0, 1.0),
         "practised_start": (bool, 0.0, 1.0),
         "periodic_gate": (float, 0.0, 1.0),
+        "ease_crossings": (float, 0.0, 1000.0),
+        "ease_after": (int, 1, 100000),
+        "ease_factor": (float, 0.0, 1.0),
+        "ease_hops": (int, 1, 100000),
     },
     "teacher": {
         "silent_db": (float, -200.0, 0.0),
