@@ -12,7 +12,8 @@ decelerate. The trained K (1.005-1.05, 14-140 hops for a 2x error: longer than m
 is kept in the model's metadata but the played law uses ``step``. The force and velocity
 played get 1 % Gaussian jitter each hop (a seeded generator), not carried on; ``F >= 0``.
 A note starts at its pair's initial force by finger (correcting a planned force: at 1 or
-the practised factor).
+the practised factor). With ``ease_crossings`` set, lasting extra slips heard in the zero
+crossings per period ease the bow once a stroke (:mod:`synth.listening.easing`).
 
 :func:`play_plan` plays a :class:`HopPlan` (per-hop controls planned by the rules: string,
 finger, velocity, beta, pair, note starts) with the controller owning the force.
