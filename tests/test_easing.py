@@ -81,3 +81,11 @@ def test_easing_is_off_by_default():
         ctl.step(None, 0.3, 0.3)
         ctl.hear_crossings(100.0)
         assert ctl.easing.factor == 1.0
+
+
+@pytest.mark.parametrize("kw", [dict(ease_after=0), dict(ease_hops=0), dict(ease_factor=1.5)])
+def test_bad_easing_settings_are_refused(kw):
+    from data_schemas.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="ease_after"):
+        ControllerSettings(**kw)

@@ -90,6 +90,10 @@ class ControllerSettings:
     ease_hops: int = 17
 
     def __post_init__(self) -> None:
+        if self.ease_after < 1 or self.ease_hops < 1 or not 0.0 <= self.ease_factor <= 1.0:
+            raise ParameterError(f"ease_after={self.ease_after} and ease_hops={self.ease_hops} "
+                                 f"must be at least 1 and ease_factor={self.ease_factor} "
+                                 f"within 0..1")
         if 0.0 < self.trim_up < 1.0:
             raise ParameterError(f"trim_up={self.trim_up} must be 0 (off) or at least 1: the "
                                  f"factor's upper bound may not lie below the plan")
