@@ -109,12 +109,13 @@ def main(argv: list[str] | None = None) -> dict:
     args = parse_args(argv)
     t0 = time.perf_counter()
     top = max(args.pulse, args.relief, 1.0)
-    kept = [s for s in setups() if s[-1] * top <= 50.0]  # the actions table's limit, N
+    every = setups()
+    kept = [s for s in every if s[-1] * top <= 50.0]  # the actions table's limit, N
     tasks = [(s, args.pulse, args.relief, args.relief_time) for s in kept]
     with ProcessPoolExecutor(max(1, args.workers)) as pool:
         rows = list(pool.map(run, tasks))
     out = {"pulse": args.pulse, "relief": args.relief, "relief_time_s": args.relief_time,
-           "left_out_over_50_N": len(setups()) - len(kept),
+           "left_out_over_50_N": len(every) - len(kept),
            "all": summary(rows),
            "per_instrument": {n: summary([r for r in rows if r["instrument"] == n])
                               for n in INSTRUMENTS},

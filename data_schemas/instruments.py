@@ -307,5 +307,36 @@ def semitones_of(ratio: float | np.ndarray) -> np.ndarray:
     return -12.0 * np.log2(1.0 - np.asarray(ratio, dtype=np.float64))
 
 
-__all__ = ["INSTRUMENT_NAMES", "DynamicsTable", "InstrumentFacts", "Limits", "dynamics_table",
-           "finger_ratio", "instrument_facts", "limits", "semitones_of"]
+def check_instrument_names(names: object, key: str, where: str) -> None:
+    """Refuse a setting that should be a list of instrument names.
+
+    Parameters
+    ----------
+    names : object
+        The setting's value.
+    key : str
+        Its dotted name, for the message.
+    where : str
+        The file or source it came from, for the message.
+
+    Raises
+    ------
+    ParameterError
+        Not a list, or a name not in :data:`INSTRUMENT_NAMES`.
+
+    Examples
+    --------
+    >>> check_instrument_names(["viola"], "bow.pressing_limit", "rules.toml")
+    >>> check_instrument_names(["lute"], "bow.pressing_limit", "rules.toml")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: rules.toml: bow.pressing_limit=['lute'] must be ...
+    """
+    if not isinstance(names, list) or not set(names) <= set(INSTRUMENT_NAMES):
+        raise ParameterError(f"{where}: {key}={names!r} must be a list of instrument names "
+                             f"({', '.join(INSTRUMENT_NAMES)})")
+
+
+__all__ = ["INSTRUMENT_NAMES", "DynamicsTable", "InstrumentFacts", "Limits",
+           "check_instrument_names", "dynamics_table", "finger_ratio", "instrument_facts",
+           "limits", "semitones_of"]

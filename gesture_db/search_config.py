@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from data_schemas.errors import ParameterError
-from data_schemas.instruments import INSTRUMENT_NAMES
+from data_schemas.instruments import check_instrument_names
 
 #: Bounds on the number of Viterbi candidates per note.
 MAX_N_BEST = 1024
@@ -99,10 +99,7 @@ def _validate(config: dict, where: str) -> None:
     if config["costs"]["dynamic_span"] <= 0:
         raise ParameterError(f"{where}: costs.dynamic_span must be > 0")
     for key in NAME_LISTS:
-        names = config["render"][key.split(".", 1)[1]]
-        if not isinstance(names, list) or not set(names) <= set(INSTRUMENT_NAMES):
-            raise ParameterError(f"{where}: {key}={names!r} must be a list of instrument "
-                                 f"names ({', '.join(INSTRUMENT_NAMES)})")
+        check_instrument_names(config["render"][key.split(".", 1)[1]], key, where)
 
 
 def _numbers(table: dict, prefix: str):

@@ -171,7 +171,13 @@ def measure_change(onsets: np.ndarray, before: float, after: float, change: floa
     return NoteChange(helm, float(post[hits[0]] - start) if hits.size else None)
 
 
-def _check(bow_force: float, bow_velocity: float, beta: float) -> None:
+def check_bowing(bow_force: float, bow_velocity: float, beta: float) -> None:
+    """Refuse a bowing that cannot be played: ParameterError naming the three values.
+
+    Examples
+    --------
+    >>> check_bowing(1.0, 0.3, 0.1)
+    """
     if not (bow_force > 0.0 and bow_velocity > 0.0 and 0.0 < beta < 0.5):
         raise ParameterError(f"need bow_force > 0 N, bow_velocity > 0 m/s and 0 < beta < 0.5;"
                              f" got {bow_force}, {bow_velocity}, {beta}")
@@ -208,7 +214,7 @@ def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force:
     >>> c.helmholtz_before, c.attack is None or c.attack > 0.005
     (True, True)
     """
-    _check(bow_force, bow_velocity, beta)
+    check_bowing(bow_force, bow_velocity, beta)
     if not acceleration > 0.0:
         raise ParameterError(f"acceleration={acceleration} m/s^2 must be > 0")
     turn = CHANGE_AT + bow_velocity / acceleration
@@ -247,7 +253,7 @@ def finger_change(instrument: str | InstrumentConstants, string: int, *, bow_for
         Its attack timed from :data:`CHANGE_AT` (the finger lands within the block that
         ends after it: its ratio ramps over that block).
     """
-    _check(bow_force, bow_velocity, beta)
+    check_bowing(bow_force, bow_velocity, beta)
     ratio = float(finger_ratio(semitones))
 
     def control(inst: Instrument, t: float) -> BowControl:
@@ -259,5 +265,5 @@ def finger_change(instrument: str | InstrumentConstants, string: int, *, bow_for
     return measure_change(onsets, f0, f0 / (1.0 - ratio), CHANGE_AT)
 
 
-__all__ = ["NoteChange", "bow_change", "finger_change", "measure_change", "reversal_speed",
-           "slip_onsets"]
+__all__ = ["NoteChange", "bow_change", "check_bowing", "finger_change", "measure_change",
+           "reversal_speed", "slip_onsets"]

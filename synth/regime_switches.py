@@ -36,7 +36,7 @@ import numpy as np
 from data_schemas.errors import ParameterError
 from synth.controls import BowControl
 from synth.instrument import Instrument
-from synth.note_changes import measure_change, slip_onsets
+from synth.note_changes import check_bowing, measure_change, slip_onsets
 
 #: Bow acceleration of the start, m/s^2.
 ACCELERATION = 5.0
@@ -92,9 +92,7 @@ def _rate(onsets: np.ndarray, f0: float, start: float, end: float) -> float:
 
 def _check(bow_force: float, bow_velocity: float, beta: float, pulse: float, relief: float,
            relief_time: float) -> None:
-    if not (bow_force > 0.0 and bow_velocity > 0.0 and 0.0 < beta < 0.5):
-        raise ParameterError(f"need bow_force > 0 N, bow_velocity > 0 m/s and 0 < beta < 0.5;"
-                             f" got {bow_force}, {bow_velocity}, {beta}")
+    check_bowing(bow_force, bow_velocity, beta)
     if not (pulse > 0.0 and 0.0 <= relief <= MAX_RELIEF and 0.0 < relief_time <= 0.5):
         raise ParameterError(f"need pulse > 0, 0 <= relief <= {MAX_RELIEF:g} and 0 < "
                              f"relief_time <= 0.5 s; got {pulse}, {relief}, {relief_time}")

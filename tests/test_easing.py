@@ -9,9 +9,16 @@ from hypothesis import strategies as st
 
 from synth.listening.controller import ControllerSettings, ForceController
 from synth.listening.easing import Easing, crossings_per_period
-from synth.listening.feature_spec import COL_ZCR, HOP, WINDOW
+from synth.listening.feature_spec import COL_ZCR, FEATURE_NAMES, HOP, WINDOW
 from synth.listening.features import frame_features
 from tests.test_feedback_law import PlantModel
+
+
+def _heard(crossings: float) -> np.ndarray:
+    """A listener's feature row whose zero crossings are ``crossings`` per period of 441 Hz."""
+    row = np.zeros(len(FEATURE_NAMES))
+    row[COL_ZCR] = crossings * 441.0 / 44100
+    return row
 
 
 def _brute(crossings: list, threshold: float, after: int, factor: float, hops: int) -> list:
@@ -66,7 +73,7 @@ def test_the_controller_eases_only_once_it_listens():
     factors = []
     for _ in range(14):
         ctl.step(None, 0.3, 0.3)
-        ctl.hear_crossings(12.0)
+        ctl.hear_crossings(_heard(12.0), 441.0, 44100)
         factors.append(ctl.easing.factor)
     # hops 1-5 are grace (listening from the 6th); the 8th hop completes three high hops
     assert factors == [1.0] * 7 + [0.25] * 4 + [1.0] * 3
@@ -79,7 +86,7 @@ def test_easing_is_off_by_default():
     ctl.start_note(0.0, 1.0)
     for _ in range(20):
         ctl.step(None, 0.3, 0.3)
-        ctl.hear_crossings(100.0)
+        ctl.hear_crossings(_heard(100.0), 441.0, 44100)
         assert ctl.easing.factor == 1.0
 
 

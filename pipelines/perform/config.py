@@ -21,7 +21,13 @@ from typing import Any
 import numpy as np
 
 from data_schemas.errors import ParameterError
-from data_schemas.instruments import INSTRUMENT_NAMES, dynamics_table, instrument_facts, limits
+from data_schemas.instruments import (
+    INSTRUMENT_NAMES,
+    check_instrument_names,
+    dynamics_table,
+    instrument_facts,
+    limits,
+)
 
 _N_LEVELS = 10
 #: dB a level below pppp or above ffff (velocity and force scaled together at the end lane's
@@ -204,10 +210,7 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
     margin = config["bow"]["margin"]
     if not _is_number(margin) or not 0 <= margin < 0.5:
         raise ParameterError(f"{source}: bow.margin={margin!r} must be in [0, 0.5)")
-    names = config["bow"]["pressing_limit"]
-    if not isinstance(names, list) or not set(names) <= set(INSTRUMENT_NAMES):
-        raise ParameterError(f"{source}: bow.pressing_limit={names!r} must be a list of "
-                             f"instrument names ({', '.join(INSTRUMENT_NAMES)})")
+    check_instrument_names(config["bow"]["pressing_limit"], "bow.pressing_limit", source)
     for key in config["articulations"]:
         _positive(config, "articulations", key, source)
     for key in config["techniques"]:

@@ -92,15 +92,18 @@ class ForceController:
         """Whether the law may act on this hop's class (past the grace and quiet hops)."""
         return self._hops > self.settings.grace_hops and self._quiet < 0
 
-    def hear_crossings(self, crossings: float | None) -> None:
-        """Count the hop's zero crossings per period (None: nothing heard); ease if due.
+    def hear_crossings(self, features: np.ndarray | None, f0: float, sample_rate: int) -> None:
+        """Count the hop's zero crossings per period of ``f0`` (Hz); ease if due.
 
+        ``features`` is the listener's row of the window ending now (None: nothing heard).
         While eased the law rests, and it listens again ``change_hops`` after the easing
         (the analysis window still holds the eased sound).
         """
         if not self.settings.ease_crossings:
             return
-        if self.easing.hear(crossings if self.listening() else None):
+        heard = features is not None and self.listening()
+        crossings = crossings_per_period(features[COL_ZCR], sample_rate, f0) if heard else None
+        if self.easing.hear(crossings):
             self._recent.clear()
             self._quiet = self.settings.ease_hops + self.settings.change_hops
 
@@ -349,9 +352,7 @@ class _HopLoop:
                 self.draw += 1
             else:
                 self.classes[i] = ctl.step(self.features.get(s), speed, self.target_speed[i])
-        feats = self.features.get(s)
-        ctl.hear_crossings(None if feats is None else crossings_per_period(
-            feats[COL_ZCR], self.sample_rate, self.expected_f0[i]))
+        ctl.hear_crossings(self.features.get(s), self.expected_f0[i], self.sample_rate)
 
     def controls(self, k: int) -> dict[int, BowControl]:
         """Bowing of every bowed string at the end of hop ``k`` (logged)."""
