@@ -337,6 +337,43 @@ def check_instrument_names(names: object, key: str, where: str) -> None:
                              f"({', '.join(INSTRUMENT_NAMES)})")
 
 
-__all__ = ["INSTRUMENT_NAMES", "DynamicsTable", "InstrumentFacts", "Limits",
+def check_beta_range(value: object, key: str, where: str) -> None:
+    """Refuse a setting that should be a range of beta, ``[low, high]``.
+
+    ``0 <= low <= high < 0.5`` (the actions table's bound on beta); a bound of 0 means
+    none (``[0, 0]``: no range).
+
+    Parameters
+    ----------
+    value : object
+        The setting's value.
+    key : str
+        Its dotted name, for the message.
+    where : str
+        The file or source it came from, for the message.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``where`` and ``key``.
+
+    Examples
+    --------
+    >>> check_beta_range([0.0, 0.13], "render.beta_range.cello", "search.toml")
+    >>> check_beta_range([0.2, 0.1], "render.beta_range.cello", "s.toml")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    data_schemas.errors.ParameterError: s.toml: render.beta_range.cello=[0.2, 0.1] must be ...
+    """
+    ok = (isinstance(value, list) and len(value) == 2
+          and all(isinstance(x, int | float) and not isinstance(x, bool) for x in value)
+          and all(0.0 <= x < 0.5 for x in value)
+          and (value[1] == 0.0 or value[0] <= value[1]))
+    if not ok:
+        raise ParameterError(f"{where}: {key}={value!r} must be [low, high] with "
+                             "0 <= low <= high < 0.5 (0: no bound)")
+
+
+__all__ = ["INSTRUMENT_NAMES", "DynamicsTable", "InstrumentFacts", "Limits", "check_beta_range",
            "check_instrument_names", "dynamics_table", "finger_ratio", "instrument_facts",
            "limits", "semitones_of"]

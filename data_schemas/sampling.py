@@ -87,6 +87,12 @@ SAMPLE_CHOICES = TableSpec(
                "instrument model's playable space (pipelines.methods.playable; 1 = as "
                "sampled). Absent before the transform.",
                minimum=0.0, exclusive_minimum=True, nullable=True, required=False),
+        Column("beta_factor", pa.float64(), "1",
+               "Factor applied to the sample's contact point beta (and its bow velocity; "
+               "its force by its inverse square root) to keep it in the instrument's "
+               "range (pipelines.methods.sampled_beta; median over the note, 1 = as "
+               "sampled). Absent before the transform.",
+               minimum=0.0, exclusive_minimum=True, nullable=True, required=False),
         Column("bite", pa.bool_(), "",
                "The note caught the string with the rules' bite (pipelines.methods."
                "sampled_bite; False = force as sampled). Absent before the transform.",

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from data_schemas.errors import ParameterError
-from data_schemas.instruments import check_instrument_names
+from data_schemas.instruments import check_beta_range, check_instrument_names
 
 #: Bounds on the number of Viterbi candidates per note.
 MAX_N_BEST = 1024
@@ -100,6 +100,8 @@ def _validate(config: dict, where: str) -> None:
         raise ParameterError(f"{where}: costs.dynamic_span must be > 0")
     for key in NAME_LISTS:
         check_instrument_names(config["render"][key.split(".", 1)[1]], key, where)
+    for name, value in config["render"]["beta_range"].items():
+        check_beta_range(value, f"render.beta_range.{name}", where)
 
 
 def _numbers(table: dict, prefix: str):
@@ -107,7 +109,7 @@ def _numbers(table: dict, prefix: str):
     for key, value in table.items():
         if isinstance(value, dict):
             yield from _numbers(value, f"{prefix}{key}.")
-        elif prefix and f"{prefix}{key}" not in NAME_LISTS:
+        elif prefix and f"{prefix}{key}" not in NAME_LISTS and prefix != "render.beta_range.":
             yield f"{prefix}{key}", value
 
 

@@ -92,8 +92,26 @@ def playable_band(search_config: dict) -> float:
     return float(search_config.get("render", {}).get("playable_band", 0.0))
 
 
-def _note_of_rows(actions: pd.DataFrame, targets: pd.DataFrame) -> np.ndarray:
-    """Target index of each bowed row (-1: before the first target, a lift or a pluck)."""
+def note_of_rows(actions: pd.DataFrame, targets: pd.DataFrame) -> np.ndarray:
+    """Target index of each bowed row (-1: before the first target, a lift or a pluck).
+
+    Parameters
+    ----------
+    actions : pandas.DataFrame
+        Actions of one part (``time`` s, ``pluck``, ``bow_force`` N).
+    targets : pandas.DataFrame
+        Sampling targets sorted by ``onset`` (s), with ``duration`` (s).
+
+    Returns
+    -------
+    np.ndarray [shape=(len(actions),)], int
+
+    Examples
+    --------
+    >>> acts = pd.DataFrame({"time": [0.0, 0.3, 0.6], "pluck": False, "bow_force": 1.0})
+    >>> note_of_rows(acts, pd.DataFrame({"onset": [0.2], "duration": [0.2]})).tolist()
+    [-1, 0, -1]
+    """
     onset = targets["onset"].to_numpy(np.float64)
     end = onset + targets["duration"].to_numpy(np.float64)
     t = actions["time"].to_numpy(np.float64)
@@ -139,14 +157,14 @@ def note_force_factors(actions: pd.DataFrame, targets: pd.DataFrame,
         ``band`` below 1 or not a number.
     """
     _check_band(band)
-    return _factors(actions, _note_of_rows(actions, targets), len(targets), reference_forces,
+    return _factors(actions, note_of_rows(actions, targets), len(targets), reference_forces,
                     band, limit)
 
 
 def _factors(actions: pd.DataFrame, note: np.ndarray, n_notes: int,
              reference_forces: np.ndarray, band: float,
              limit: PressingLimit | None = None) -> np.ndarray:
-    """:func:`note_force_factors` from each row's note (``_note_of_rows``)."""
+    """:func:`note_force_factors` from each row's note (``note_of_rows``)."""
     v = np.abs(actions["bow_velocity"].to_numpy(np.float64))
     string = actions["string"].to_numpy(int)
     beta = actions["beta"].to_numpy(np.float64)
@@ -214,7 +232,7 @@ def into_playable(actions: pd.DataFrame, targets: pd.DataFrame, reference_forces
     (0.5, 2.25)
     """
     _check_band(band)
-    note = _note_of_rows(actions, targets)
+    note = note_of_rows(actions, targets)
     factors = _factors(actions, note, len(targets), reference_forces, band, limit)
     out = actions.copy()
     if np.all(factors == 1.0):  # then the band alone moves no note either
@@ -315,5 +333,5 @@ def loop_range(planned: np.ndarray, bow_velocity: np.ndarray, beta: np.ndarray,
 
 
 __all__ = ["ATTACK_HOLD", "ATTACK_RELEASE", "BLEND", "MAX_FACTOR", "MOVING", "SUSTAIN_SHARE",
-           "into_playable", "loop_range", "note_force_factors", "playable_band", "to_playable",
-           "window_middle"]
+           "into_playable", "loop_range", "note_force_factors", "note_of_rows", "playable_band",
+           "to_playable", "window_middle"]

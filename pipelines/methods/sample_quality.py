@@ -2,9 +2,10 @@
 
 Each chosen sample is played alone (its own duration, pitch, string and dynamic, a rest
 between samples) through the modal engine on its instrument, with the forces adapted to the
-model's strings as sampling does (:func:`pipelines.methods.sampling_db.adapt_forces`); the
-yardstick (:func:`pipelines.listening.evaluate.evaluate`, slip record) gives every sustained
-hop the automatic teacher's class. The histograms go to the database's
+model's strings and brought into the playable space as sampling does
+(:func:`pipelines.methods.sampling_db.adapt_forces`, the contact point's range, the force
+band and the bite); the yardstick (:func:`pipelines.listening.evaluate.evaluate`, slip
+record) gives every sustained hop the automatic teacher's class. The histograms go to the database's
 :data:`data_schemas.gesture_db.DB_QUALITY` table; the search then adds each sample's quality
 cost (:func:`gesture_db.search.quality_costs`, weight ``[weights] quality``).
 """
@@ -82,6 +83,7 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
     from gesture_db.assemble import assemble_actions
     from pipelines.listening.evaluate import evaluate
     from pipelines.methods.playable import to_playable
+    from pipelines.methods.sampled_beta import to_beta_range
     from pipelines.methods.sampled_bite import bite_chosen
     from pipelines.methods.sampled_bow import assembly_options
     from pipelines.methods.sampling_db import adapt_forces
@@ -95,6 +97,7 @@ def judge_batch(samples: pd.DataFrame, instrument: str, database, *, seed: int,
                                **assembly_options(config, database.search_config, instrument))
     actions = adapt_forces(actions, instrument, database.search_config,
                            sampled_from=instrument)
+    actions, _ = to_beta_range(actions, targets, choices, instrument, database.search_config)
     actions, _ = to_playable(actions, targets, choices, instrument, database.search_config)
     # each practice note starts a stroke from rest, and bites as it would in a piece
     actions, _ = bite_chosen(actions, targets, choices, [None] * len(targets), config,

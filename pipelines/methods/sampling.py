@@ -32,6 +32,7 @@ from gesture_db.groups import chain_positions
 from pipelines.methods.playable import playable_band, to_playable
 from pipelines.methods.pressing import pressing_limit
 from pipelines.methods.result import PartRender, RenderResult, mix
+from pipelines.methods.sampled_beta import to_beta_range
 from pipelines.methods.sampled_bite import bite_chosen
 from pipelines.methods.sampled_bow import assembly_options
 from pipelines.methods.sampled_loop import correct_force
@@ -244,8 +245,9 @@ def sample_part(notes: pd.DataFrame, database: SamplingDatabase, config: dict[st
                                bow_length=instrument_facts(_name).bow_length,
                                **assembly_options(config, database.search_config, _name))
     actions = adapt_forces(actions, _name, database.search_config, sampled_from=source)
-    actions, choices = to_playable(actions, targets, result.choices, _name,
-                                   database.search_config)
+    actions, choices = to_beta_range(actions, targets, result.choices, _name,
+                                     database.search_config)
+    actions, choices = to_playable(actions, targets, choices, _name, database.search_config)
     actions, choices = bite_chosen(actions, targets, choices, bowed, config,
                                    database.search_config, _name)
     actions, hand_warnings = play_left_hand(actions, targets, choices, bowed,
