@@ -115,3 +115,33 @@ def test_shipped_ranges_and_bad_ones_refused():
         load_search_config(overrides={"render": {"beta_range": {"lute": [0.0, 0.1]}}})
     with pytest.raises(ParameterError, match="need 0 <= low <= high"):
         into_beta_range(pd.DataFrame(), 0.2, 0.1)
+
+
+def _bench():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "bench" / "contact_point.py"
+    spec = importlib.util.spec_from_file_location("contact_point_bench", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_bench_counts_starts_and_moves():
+    """Hand-made rows, then one set-up played by the bench: doubled far, single moved."""
+    bench = _bench()
+    row = dict(instrument="violin", string=0, bow_velocity=0.3, ratio=1.0, bow_force=1.0,
+               seed=0)
+    rows = [{**row, "beta": 0.1, "slips_per_period": 1.0, "moved": None},
+            {**row, "beta": 0.1, "slips_per_period": 2.0, "moved": None},
+            {**row, "beta": 0.2, "slips_per_period": 2.0, "moved": 1.0},
+            {**row, "beta": 0.2, "slips_per_period": 1.0, "moved": 1.0}]
+    s = bench.summary(rows)
+    assert s["starts"] == 4 and s["outside_range"] == 2
+    assert s["multiple_by_beta"]["0.1"] == 0.5 and s["multiple_by_beta"]["0.2"] == 0.5
+    assert s["outside_multiple_as_played"] == 0.5 and s["outside_multiple_moved"] == 0.0
+    force = float(window_middle(reference_forces("violin")[1], 0.2, 0.165))
+    played = bench.run(("violin", 1, 0.2, 0.165, 1.0, force, 0, (0.0, 0.13)))
+    assert played["slips_per_period"] == pytest.approx(2.0, abs=0.1)
+    assert played["moved"] == pytest.approx(1.0, abs=0.05)
