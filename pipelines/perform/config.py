@@ -391,9 +391,9 @@ def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.nda
     --------
     >>> cfg = load_config()
     >>> [round(float(x), 4) for x in dynamic_table(cfg, "velocity", np.array([0.0, -2.0]))]
-    [0.074, 0.0371]
+    [0.08, 0.0401]
     >>> float(dynamic_table(cfg, "beta", np.array([-2.0]))[0])
-    0.185
+    0.2
     """
     if key not in ("beta", "velocity"):
         raise ParameterError(f"dynamic_table: {key!r} is not a bow lane (beta or velocity; "
