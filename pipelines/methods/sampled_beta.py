@@ -96,6 +96,14 @@ def into_beta_range(actions: pd.DataFrame, low: float, high: float
     ------
     ParameterError
         ``low`` above ``high`` or either outside 0..``inf``.
+
+    Examples
+    --------
+    >>> a = pd.DataFrame({"time": [0.0], "string": 0, "bow_velocity": 0.1, "bow_force": 0.5,
+    ...                   "beta": 0.2, "pluck": False})
+    >>> out, r = into_beta_range(a, 0.0, 0.1)
+    >>> float(out["beta"][0]), float(out["bow_velocity"][0]), round(float(out["bow_force"][0]), 4)
+    (0.1, 0.05, 0.7071)
     """
     if not 0.0 <= low <= high:
         raise ParameterError(f"beta range [{low}, {high}]: need 0 <= low <= high")
@@ -123,6 +131,16 @@ def to_beta_range(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.Data
 
     Returns the actions (unchanged without a range) and a copy of ``choices`` whose
     ``beta_factor`` is each note's median factor over its bowed frames (1: as sampled).
+
+    Examples
+    --------
+    >>> a = pd.DataFrame({"time": [0.0, 0.1], "string": 1, "bow_velocity": 0.2,
+    ...                   "bow_force": 1.0, "beta": 0.2, "pluck": False})
+    >>> tgt = pd.DataFrame({"onset": [0.0], "duration": [0.2]})
+    >>> cfg = {"render": {"beta_range": {"viola": [0.0, 0.13]}}}
+    >>> _, ch = to_beta_range(a, tgt, pd.DataFrame({"target_index": [0]}), "viola", cfg)
+    >>> ch["beta_factor"].round(2).tolist()
+    [0.65]
     """
     from pipelines.methods.playable import note_of_rows
 
