@@ -24,6 +24,8 @@ MAX_N_BEST = 1024
 MAX_VALUE = 1e6
 #: Settings that are lists of instrument names, not numbers.
 NAME_LISTS = ("render.bite", "render.limit_acceleration", "render.pressing_limit")
+#: Tables of beta ranges per instrument (``[low, high]``), not numbers.
+RANGE_TABLES = ("render.beta_range",)
 
 
 @lru_cache(maxsize=1)
@@ -100,17 +102,19 @@ def _validate(config: dict, where: str) -> None:
         raise ParameterError(f"{where}: costs.dynamic_span must be > 0")
     for key in NAME_LISTS:
         check_instrument_names(config["render"][key.split(".", 1)[1]], key, where)
-    for name, value in config["render"]["beta_range"].items():
-        check_beta_range(value, f"render.beta_range.{name}", where)
+    for key in RANGE_TABLES:
+        for name, value in config["render"][key.split(".", 1)[1]].items():
+            check_beta_range(value, f"{key}.{name}", where)
 
 
 def _numbers(table: dict, prefix: str):
     """``(dotted name, value)`` of every numeric setting below the top level."""
     for key, value in table.items():
         if isinstance(value, dict):
-            yield from _numbers(value, f"{prefix}{key}.")
-        elif prefix and f"{prefix}{key}" not in NAME_LISTS and prefix != "render.beta_range.":
+            if f"{prefix}{key}" not in RANGE_TABLES:
+                yield from _numbers(value, f"{prefix}{key}.")
+        elif prefix and f"{prefix}{key}" not in NAME_LISTS:
             yield f"{prefix}{key}", value
 
 
-__all__ = ["MAX_N_BEST", "MAX_VALUE", "NAME_LISTS", "load_search_config"]
+__all__ = ["MAX_N_BEST", "MAX_VALUE", "NAME_LISTS", "RANGE_TABLES", "load_search_config"]

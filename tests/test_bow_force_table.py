@@ -8,12 +8,12 @@ the key.
 
 from __future__ import annotations
 
-import importlib.util
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
+from _bench import load_bench
 
 from data_schemas.errors import ParameterError
 from data_schemas.instruments import instrument_facts
@@ -95,11 +95,7 @@ def test_the_players_table_plays_the_middle_of_players_forces():
 def test_the_players_bench_reads_both_tables_and_sums_notes_by_hand():
     """bench/players_forces.py: its mf forces are the tables' level-5 entries, and its
     figures over two toy notes are the hop-weighted share and the class shares."""
-    root = Path(__file__).resolve().parents[1]
-    spec = importlib.util.spec_from_file_location("players_forces",
-                                                  root / "bench" / "players_forces.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = load_bench("players_forces")
     mf = bench.mf_forces(["shipped", "players"])
     assert mf["shipped"]["violin"]["D"] == default_config()["bow_force"]["violin"]["D"][5]
     assert mf["players"]["cello"]["C"] == pytest.approx(np.sqrt(0.5 * 5.0) * 1.1, rel=2e-3)

@@ -2,27 +2,19 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 
 import pytest
+from _bench import load_bench
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _bench():
-    sys.path.insert(0, str(ROOT / "bench"))
-    spec = importlib.util.spec_from_file_location("force_leverage",
-                                                  ROOT / "bench" / "force_leverage.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-fl = _bench()
+sys.path.insert(0, str(ROOT / "bench"))
+fl = load_bench("force_leverage")
 PLAYS = fl.variants([0.5, 1.0, 2.0], 2)
 
 

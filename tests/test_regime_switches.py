@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _bench import load_bench
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -72,17 +73,6 @@ def test_bad_settings_are_refused(kw, match):
         rs.regime_switch("cello", 2, **args)
 
 
-def _bench():
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "bench" / "regime_switch.py"
-    spec = importlib.util.spec_from_file_location("regime_switch_bench", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_the_bench_counts_each_outcome():
     """Hand-made rows: from the start, knocked out, stays, eased back, taken out."""
     row = dict(instrument="violin", string=0, bow_velocity=0.3, beta=0.1, bow_force=1.0)
@@ -96,7 +86,8 @@ def test_the_bench_counts_each_outcome():
         {**row, "before_pulse": 1.0, "after_pulse": 1.0, "left_alone": 1.0, "eased": 2.0,
          "attack_ms": None},                                  # taken out by easing
     ]
-    s = _bench().summary(rows)
+    bench = load_bench("regime_switch")
+    s = bench.summary(rows)
     median = s.pop("attack_ms_median_eased")
     assert s == {"set_ups": 4, "multiple_from_start": 1, "knocked_out_by_bump": 2,
                  "multiple_before_relief": 3, "still_multiple_left_alone": 2,
@@ -104,4 +95,4 @@ def test_the_bench_counts_each_outcome():
                  "taken_out_by_easing": 1}
     assert median is None   # the median of 20 ms and "never" is "never"
     rows[1]["attack_ms"] = 40.0
-    assert _bench().summary(rows)["attack_ms_median_eased"] == pytest.approx(30.0)
+    assert bench.summary(rows)["attack_ms_median_eased"] == pytest.approx(30.0)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from _bench import load_bench
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -117,20 +118,9 @@ def test_shipped_ranges_and_bad_ones_refused():
         into_beta_range(pd.DataFrame(), 0.2, 0.1)
 
 
-def _bench():
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "bench" / "contact_point.py"
-    spec = importlib.util.spec_from_file_location("contact_point_bench", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_the_bench_counts_starts_and_moves():
     """Hand-made rows, then one set-up played by the bench: doubled far, single moved."""
-    bench = _bench()
+    bench = load_bench("contact_point")
     row = dict(instrument="violin", string=0, bow_velocity=0.3, ratio=1.0, bow_force=1.0,
                seed=0)
     rows = [{**row, "beta": 0.1, "slips_per_period": 1.0, "moved": None},

@@ -150,8 +150,9 @@ def to_beta_range(actions: pd.DataFrame, targets: pd.DataFrame, choices: pd.Data
     if bounds is not None:
         actions, r = into_beta_range(actions, *bounds)
         note = note_of_rows(actions, targets)
-        for m in np.unique(note[note >= 0]):
-            factors[m] = float(np.median(r[note == m]))
+        ours = note >= 0
+        medians = pd.Series(r[ours]).groupby(note[ours]).median()
+        factors[medians.index.to_numpy()] = medians.to_numpy()
     choices["beta_factor"] = factors[choices["target_index"].to_numpy(int)]
     return actions, choices
 
