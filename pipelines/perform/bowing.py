@@ -283,7 +283,8 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
             pos = np.interp(t, s.t, s.position)
             sounding = set(events[s.events[j - 1]].strings) if j else set()
             beta = note_beta(e, t, config, s.beta_scale)
-            force = _note_forces(e, t, speed, beta, s, sounding, config, instrument)
+            force = _note_forces(e, t, speed, beta, s, sounding, config, instrument,
+                                 None if j else _rise_from(events, k))
             n_roll = len(e.roll)
             sustain_from = e.t0 + n_roll * roll_time
             for j_roll, (string, semis) in enumerate(e.roll):
@@ -319,14 +320,28 @@ def frames(events: list[Event], strokes: list[Stroke], config: dict[str, Any], *
     return table.sort_values("time", kind="stable").reset_index(drop=True)[list(_COLUMNS)]
 
 
+def _rise_from(events: list[Event], k: int) -> float | None:
+    """The level a stroke's first event ``k`` rises from out of its bow change, or None.
+
+    That of the note before at its end, when the bow changes straight from it (no rest, no
+    pizzicato) and it was softer (:func:`note_shape.rise`).
+    """
+    e, prev = events[k], events[k - 1] if k else None
+    if prev is None or e.pizz or prev.pizz or prev.rest_after:
+        return None
+    level = float(dynamic_at(prev, np.array([prev.played_end]))[0])
+    return level if level < float(dynamic_at(e, np.array([e.t0]))[0]) else None
+
+
 def _note_forces(e: Event, t: np.ndarray, speed: np.ndarray, beta: np.ndarray, s: Stroke,
-                 sounding: set[int], config: dict[str, Any],
-                 instrument: str) -> dict[int, np.ndarray]:
+                 sounding: set[int], config: dict[str, Any], instrument: str,
+                 rise_from: float | None = None) -> dict[int, np.ndarray]:
     """Bow force (N) of ``e`` at times ``t`` on each string it bows.
 
     The bow catches each string the stroke starts on or crosses to (not one already sounding
-    in a slur, nor under grace or ornament notes: a light bow); a slowed stroke kept off the
-    bridge keeps its force at the window's middle (F ~ beta^-1.5); no string but a
+    in a slur, nor under grace or ornament notes: a light bow); out of a bow change from a
+    softer note the force rises from that note's level (``rise_from``); a slowed stroke kept
+    off the bridge keeps its force at the window's middle (F ~ beta^-1.5); no string but a
     harmonic's is pressed past its pressing limit (:func:`note_shape.pressing_cap`).
     """
     plain = e.ornament is None and not e.grace
@@ -334,7 +349,7 @@ def _note_forces(e: Event, t: np.ndarray, speed: np.ndarray, beta: np.ndarray, s
     out = {}
     for string in {*e.strings, *(r[0] for r in e.roll)}:
         force = note_force(e, t, config, s.force_scale, instrument, string,
-                           plain and string not in sounding) * lighter
+                           plain and string not in sounding, rise_from) * lighter
         out[string] = force if e.node else pressing_cap(force, speed, beta, string,
                                                         instrument, config)
     return out

@@ -128,7 +128,8 @@ UPPER_LIMITS: dict[str, dict[str, float]] = {
     "bow": {"max_acceleration": 100.0, "short_stroke_acceleration": 100.0,
             "min_speed_scale": 1.0, "max_speed_scale": 10.0, "retake_gap": 10.0,
             "region_span": 1.0, "slowed_min_beta": 0.45},
-    "articulations": {"*": 10.0, "bite_force": 4.0, "bite_hold": 1.0, "bite_time": 1.0},
+    "articulations": {"*": 10.0, "bite_force": 4.0, "bite_hold": 1.0, "bite_time": 1.0,
+                      "rise_time": 1.0},
     "techniques": {"*": 10.0},
     "instruments": {"bow_length": 1.5},
     "dynamics": {"beta": 0.5, "velocity": 5.0},
@@ -391,9 +392,9 @@ def dynamic_table(config: dict[str, Any], key: str, level: np.ndarray) -> np.nda
     --------
     >>> cfg = load_config()
     >>> [round(float(x), 4) for x in dynamic_table(cfg, "velocity", np.array([0.0, -2.0]))]
-    [0.08, 0.0401]
+    [0.074, 0.0371]
     >>> float(dynamic_table(cfg, "beta", np.array([-2.0]))[0])
-    0.2
+    0.185
     """
     if key not in ("beta", "velocity"):
         raise ParameterError(f"dynamic_table: {key!r} is not a bow lane (beta or velocity; "

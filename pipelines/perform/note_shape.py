@@ -61,16 +61,66 @@ def bite(t: np.ndarray, t0: float, config: dict[str, Any]) -> np.ndarray:
     return 1.0 + (art["bite_force"] - 1.0) * held
 
 
+def rise(e: Event, t: np.ndarray, level_from: float, config: dict[str, Any], instrument: str,
+         string: int) -> np.ndarray:
+    """Factor (<= 1 when louder) on the force of a note that rises out of a bow change.
+
+    A player does not press a louder note's force onto a bow that stands still at the turn:
+    the force starts at the newton table's force of ``level_from`` (the note before's level
+    at its end) and rises to the note's own with time constant ``[articulations]
+    rise_time`` s, geometrically: ``(F(level_from) / F(level(t))) ** exp(-(t - t0) /
+    rise_time)``.
+
+    Parameters
+    ----------
+    e : Event
+        The note; ``e.t0`` (s) is the bow change.
+    t : np.ndarray [shape=(n,)], s
+        Times of its frames.
+    level_from : float
+        Dynamic level (0..9) the force rises from.
+    config : dict
+        Rules configuration.
+    instrument : str
+    string : int
+        String index, 0 = lowest (its row of the newton table).
+
+    Returns
+    -------
+    np.ndarray [shape=(n,)]
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import bow_force, load_config
+    >>> cfg = load_config()
+    >>> e = Event(rows=[0], t0=1.0, end=2.0, strings=[1], semitones=[0.0], dynamic=7.0,
+    ...           label="D4")
+    >>> f = rise(e, np.array([1.0, 1.05, 2.0]), 5.0, cfg, "violin", 1)
+    >>> mf, ff = bow_force(cfg, "violin", 1, np.array([5.0, 7.0]))
+    >>> bool(np.isclose(f[0], mf / ff)), bool(f[0] < f[1] < f[2]), bool(f[2] > 0.999)
+    (True, True, True)
+    """
+    level = dynamic_at(e, t)
+    ratio = bow_force(config, instrument, string, np.full(t.shape, float(level_from))) \
+        / bow_force(config, instrument, string, level)
+    late = np.maximum(t - e.t0, 0.0)
+    return ratio ** np.exp(-late / config["articulations"]["rise_time"])
+
+
 def note_force(e: Event, t: np.ndarray, config: dict[str, Any], scale: float, instrument: str,
-               string: int, catches: bool = False) -> np.ndarray:
+               string: int, catches: bool = False,
+               rise_from: float | None = None) -> np.ndarray:
     """Bow force (N) of event ``e`` on ``string`` at times ``t``.
 
     The newton table's force at the event's dynamic, times ``scale`` and the articulation's
-    shape; ``catches``: the note starts a stroke or a string (:func:`bite`).
+    shape; ``catches``: the note starts a stroke or a string (:func:`bite`); ``rise_from``:
+    the level of the note before a bow change the force rises from (:func:`rise`).
     """
     art = config["articulations"]
     tech = config["techniques"]
     force = bow_force(config, instrument, string, dynamic_at(e, t)) * scale
+    if rise_from is not None:
+        force = force * rise(e, t, rise_from, config, instrument, string)
     if catches and art["bite_force"] != 1.0:
         force = force * bite(t, e.t0, config)
     if e.technique == "col_legno":

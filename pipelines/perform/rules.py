@@ -4,11 +4,12 @@ The rules follow the notation table of Vivi (Percival 2011; see the project's
 ``feedback-control.md``): dynamics set beta, bow velocity and bow force (force from a config
 table), slurs keep the bow direction, other notes decelerate to rest and reverse, ties keep
 everything, staccato / portato / breath marks shorten, accents add force, the last note on a
-string is lightened, bow-region words place the bow, up/down-bow marks set the direction,
-pizz./arco switch plucking, string marks force the string; plus tremolo (fast bow changes),
-fermata (every part waits), grace notes and ornaments (:mod:`pipelines.perform.ornaments`),
-double stops, and a bow-length budget. Every change
-of bow velocity respects the maximum bow acceleration.
+string and the last before a bow change are lightened, a note louder than the one before its
+bow change rises to its force out of the turn, bow-region words place the bow, up/down-bow
+marks set the direction, pizz./arco switch plucking, string marks force the string; plus
+tremolo (fast bow changes), fermata (every part waits), grace notes and ornaments
+(:mod:`pipelines.perform.ornaments`), double stops, and a bow-length budget. Every change of
+bow velocity respects the maximum bow acceleration.
 
 The work is split in three steps: :func:`build_events` (notes -> timed events with strings,
 fingers, articulation), :mod:`pipelines.perform.bowing` (events -> strokes with planned velocity and
@@ -279,7 +280,10 @@ def _articulate(events: list[Event], cols: dict[str, np.ndarray], config: dict[s
         gap = (nxt.t0 - e.end) if nxt is not None else np.inf
         e.rest_after = nxt is None or nxt.pizz or gap > 1e-3 or \
             e.run_position in ("end", "iso")
-        e.lighten = (not e.pizz) and (e.rest_after or set(nxt.strings) != set(e.strings)) \
+        bow_change = nxt is not None and not nxt.cont and not nxt.pizz \
+            and not bool(cols["tremolo"][e.rows].any())
+        e.lighten = (not e.pizz) and (e.rest_after or set(nxt.strings) != set(e.strings)
+                                      or bow_change) \
             and not bool(cols["tenuto"][e.rows].any())
         if nxt is not None and not nxt.pizz and abs(nxt.dynamic - e.dynamic) > 1e-9 and (
                 _fractional(nxt.dynamic) or _fractional(e.dynamic)):
