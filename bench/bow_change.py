@@ -1,6 +1,7 @@
 """Where the attacks of real music go: bow changes against finger changes, every string.
 
     python bench/bow_change.py --json [--plot PNG] [--strings TOML] [--workers 2] [--music]
+        [--ease SHARE] [--ease-time S]
 
 On a string in Helmholtz motion (set up as a player would; :mod:`synth.note_changes`),
 times how long the next note takes to be in Helmholtz motion again:
@@ -10,6 +11,9 @@ times how long the next note takes to be in Helmholtz motion again:
   (violin 0.15 / 0.55 / 2 N, viola 0.2 / 0.7 / 2.5 N, cello 0.5 / 1.6 / 5 N);
 - ``finger_changes``: under a slur, a finger stops the string 2 or 5 semitones higher at
   the same forces, bow held.
+
+``--ease 0.5 [--ease-time 0.1]`` eases the bow changes' force into the turn as the rules
+lighten the last note of a stroke (:func:`synth.note_changes.eased_force`).
 
 Attack: from the change to the first of 5 consecutive slip intervals within 3 % of the
 period, as the yardstick times it from the slip record (None: not within 0.4 s). The
@@ -68,6 +72,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--music", action="store_true",
                    help="also the rules' tuning set, attacks by bowing join (~5 min)")
+    p.add_argument("--ease", type=float, default=1.0, metavar="SHARE",
+                   help="bow changes: the force eases to this share of itself into the turn "
+                        "(the rules' lighten_force 0.5; default 1: held)")
+    p.add_argument("--ease-time", type=float, default=0.1, metavar="S",
+                   help="over this many seconds before the turn (the rules' lighten_time)")
     return p.parse_args(argv)
 
 
@@ -129,15 +138,17 @@ def _finite(x: float) -> float | None:
     return round(float(x), 1) if np.isfinite(x) else None
 
 
-def tasks(strings: str | None, seed: int) -> list[tuple]:
+def tasks(strings: str | None, seed: int, ease: tuple[float, float] = (1.0, 0.1)
+          ) -> list[tuple]:
+    """Every change to measure; ``ease``: (share, s) of the bow changes' easing."""
     from synth.strings import load_instrument
 
     out = []
     for name, forces in FORCES.items():
         for s in range(len(load_instrument(name).strings)):
             for f in forces:
-                out += [("bow", name, s, f, a, strings, seed) for a in ACCELERATIONS]
-                out += [("finger", name, s, f, k, strings, seed) for k in SEMITONES]
+                out += [("bow", name, s, f, a, strings, seed, ease) for a in ACCELERATIONS]
+                out += [("finger", name, s, f, k, strings, seed, ease) for k in SEMITONES]
     return out
 
 
@@ -145,10 +156,11 @@ def run(task: tuple) -> dict:
     from synth.note_changes import bow_change, finger_change
     from synth.strings import load_instrument
 
-    kind, name, s, force, x, strings, seed = task
+    kind, name, s, force, x, strings, seed, (ease, ease_time) = task
     inst = name if strings is None else load_instrument(name, strings)
     if kind == "bow":
-        c = bow_change(inst, s, bow_force=force, acceleration=x, seed=seed)
+        c = bow_change(inst, s, bow_force=force, acceleration=x, seed=seed, ease=ease,
+                       ease_time=ease_time)
     else:
         c = finger_change(inst, s, bow_force=force, semitones=x, seed=seed)
     return {"kind": kind, "instrument": name, "string": s, "bow_force": force,
@@ -214,13 +226,14 @@ def plot(rows: list[dict], path: Path) -> Path:
 def main(argv: list[str] | None = None) -> dict:
     args = parse_args(argv)
     start = time.perf_counter()
-    todo = tasks(args.strings, args.seed)
+    todo = tasks(args.strings, args.seed, (args.ease, args.ease_time))
     with ProcessPoolExecutor(max(args.workers, 1)) as pool:
         rows = list(pool.map(run, todo, chunksize=4))
     report = {"benchmark": "bow_change", "strings": args.strings or "default",
               "settings": {"bow_velocity": 0.3, "beta": 0.1, "forces": FORCES,
                            "accelerations": ACCELERATIONS, "semitones": SEMITONES,
-                           "quick_s": QUICK, "seed": args.seed},
+                           "quick_s": QUICK, "seed": args.seed, "ease": args.ease,
+                           "ease_time_s": args.ease_time},
               "summary": summary(rows), "changes": rows,
               "seconds": round(time.perf_counter() - start, 1)}
     if args.plot:

@@ -11,7 +11,8 @@ note's ``bow_force`` between :data:`SETUP_BITE` and :data:`SETUP_BITE` +
 the change (:attr:`NoteChange.helmholtz_before`).
 
 - :func:`bow_change`: the bow decelerates at ``acceleration`` through zero and accelerates
-  at the same rate back to ``bow_velocity`` in the other direction, force and beta held;
+  at the same rate back to ``bow_velocity`` in the other direction, beta held and the force
+  held or eased into the turn (``ease``, as the rules lighten a stroke's last note);
 - :func:`finger_change`: a finger stops the string ``semitones`` higher at one block's
   boundary, the bow held.
 
@@ -183,9 +184,28 @@ def check_bowing(bow_force: float, bow_velocity: float, beta: float) -> None:
                              f" got {bow_force}, {bow_velocity}, {beta}")
 
 
+def eased_force(t: float, turn: float, bow_force: float, ease: float = 1.0,
+                ease_time: float = 0.1) -> float:
+    """Bow force (N) at time ``t`` (s) of a bow eased into its turn at ``turn`` (s).
+
+    Linearly from ``bow_force`` to ``ease * bow_force`` over the ``ease_time`` s before the
+    turn, as the rules lighten the last note of a stroke (``[articulations]
+    lighten_force``, ``lighten_time``); ``bow_force`` again from the turn on.
+
+    Examples
+    --------
+    >>> [round(eased_force(t, 1.0, 2.0, 0.5, 0.1), 3) for t in (0.8, 0.95, 1.0, 1.01)]
+    [2.0, 1.5, 1.0, 2.0]
+    """
+    if t > turn:
+        return bow_force
+    tail = min(max((t - (turn - ease_time)) / ease_time, 0.0), 1.0)
+    return bow_force * (1.0 - (1.0 - ease) * tail)
+
+
 def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force: float,
                acceleration: float, bow_velocity: float = 0.3, beta: float = 0.1,
-               seed: int = 0) -> NoteChange:
+               seed: int = 0, ease: float = 1.0, ease_time: float = 0.1) -> NoteChange:
     """Turn the bow on a string in Helmholtz motion; how long until it is back.
 
     Parameters
@@ -194,7 +214,7 @@ def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force:
     string : int
         String index, 0 = lowest.
     bow_force : float, N
-        Held through the change.
+        Held through the change (but see ``ease``).
     acceleration : float, m/s^2
         Of the slowing down and of the new stroke's start (the bow turns at
         ``CHANGE_AT + bow_velocity / acceleration`` s).
@@ -202,6 +222,9 @@ def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force:
         Speed before and after the change.
     beta : float
     seed : int
+    ease, ease_time : float (share in (0, 1]) and float (s, > 0)
+        The force eases to ``ease`` times ``bow_force`` over the ``ease_time`` s before the
+        turn (:func:`eased_force`); 1 holds it.
 
     Returns
     -------
@@ -217,6 +240,8 @@ def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force:
     check_bowing(bow_force, bow_velocity, beta)
     if not acceleration > 0.0:
         raise ParameterError(f"acceleration={acceleration} m/s^2 must be > 0")
+    if not (0.0 < ease <= 1.0 and ease_time > 0.0):
+        raise ParameterError(f"need 0 < ease <= 1 and ease_time > 0 s; got {ease}, {ease_time}")
     turn = CHANGE_AT + bow_velocity / acceleration
 
     def control(inst: Instrument, t: float) -> BowControl:
@@ -224,7 +249,7 @@ def bow_change(instrument: str | InstrumentConstants, string: int, *, bow_force:
             bite = inst.voices[string].string.reference_force
             return BowControl(*_setup(bite, bow_force, bow_velocity, t), beta)
         return BowControl(reversal_speed(t - CHANGE_AT, bow_velocity, acceleration),
-                          bow_force, beta)
+                          eased_force(t, turn, bow_force, ease, ease_time), beta)
 
     onsets, f0 = slip_onsets(instrument, string, seed, turn + LIMIT, control)
     return measure_change(onsets, f0, f0, CHANGE_AT, turn)

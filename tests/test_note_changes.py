@@ -75,3 +75,43 @@ def test_bad_bowing_is_refused(kwargs):
 def test_a_bow_change_needs_a_positive_acceleration():
     with pytest.raises(ParameterError, match="acceleration"):
         nc.bow_change("violin", 1, bow_force=1.0, acceleration=0.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(t=st.floats(0.0, 2.0), turn=st.floats(0.2, 1.5), force=st.floats(0.01, 20.0),
+       ease=st.floats(0.01, 1.0), ease_time=st.floats(0.001, 0.5))
+def test_the_eased_force_falls_linearly_into_the_turn(t, turn, force, ease, ease_time):
+    start = turn - ease_time
+    if t <= start or t > turn:
+        want = force
+    else:
+        want = force + (ease * force - force) * (t - start) / ease_time
+    assert nc.eased_force(t, turn, force, ease, ease_time) == pytest.approx(want, rel=1e-9)
+
+
+def test_a_bow_change_eased_by_one_is_the_held_one():
+    held = nc.bow_change("violin", 2, bow_force=0.8, acceleration=10.0)
+    assert nc.bow_change("violin", 2, bow_force=0.8, acceleration=10.0, ease=1.0,
+                         ease_time=0.3) == held
+
+
+@pytest.mark.parametrize("ease, ease_time", [(0.0, 0.1), (1.5, 0.1), (0.5, 0.0)])
+def test_bad_easing_is_refused(ease, ease_time):
+    with pytest.raises(ParameterError, match="ease"):
+        nc.bow_change("violin", 1, bow_force=1.0, acceleration=5.0, ease=ease,
+                      ease_time=ease_time)
+
+
+def test_the_bench_eases_its_bow_changes_as_the_library_does():
+    from _bench import load_bench
+
+    bench = load_bench("bow_change")
+    bows = [t for t in bench.tasks(None, 0, (0.5, 0.1)) if t[0] == "bow"]
+    assert len(bows) == 12 * 3 * 4 and {t[-1] for t in bows} == {(0.5, 0.1)}
+    task = next(t for t in bows if t[1:5] == ("violin", 2, 0.55, 10.0))
+    direct = nc.bow_change("violin", 2, bow_force=0.55, acceleration=10.0, ease=0.5,
+                           ease_time=0.1)
+    row = bench.run(task)
+    assert row["helmholtz_before"] is direct.helmholtz_before
+    assert row["attack_ms"] == (None if direct.attack is None
+                                else round(1000.0 * direct.attack, 2))
