@@ -166,11 +166,31 @@ def test_a_tied_group_beats_the_rest_only_when_each_member_separates_from_each()
     assert verdict_sentence(group, n_excerpts=2, n_seeds=5) == (
         "On 2 excerpts x 5 seeds, sampling and open beat rules and feedback on Helmholtz "
         "share.")
-    # feedback ties with the best and with rules; rules is apart from the best only
+    # feedback ties with the best and with rules; rules is apart from the best only, and
+    # the sentence names it behind the one it separates from
     chain = _summary(at={"rules": Interval(124, 110, 141), "feedback": Interval(118, 100, 140),
                          "sampling": Interval(98, 89, 120), "open": Interval(95, 86, 109)})
     assert verdict_sentence(chain, n_excerpts=2, n_seeds=5) == (
-        "On 2 excerpts x 5 seeds, feedback, sampling and open do not separate on attack p90.")
+        "On 2 excerpts x 5 seeds, feedback, sampling and open do not separate on attack p90 "
+        "(rules behind open).")
+
+
+def test_a_method_left_out_of_a_tie_is_named_behind_those_it_trails():
+    """The held-out run of the thirty-fourth session. Helmholtz share: rules, sampling and
+    open do not separate; feedback (high 0.948) is separated from rules (low 0.953) and
+    open (0.949), not from sampling (0.946). Class 3: all three separate from feedback."""
+    s = _summary(hs={"rules": Interval(0.961, 0.953, 0.967),
+                     "feedback": Interval(0.943, 0.937, 0.948),
+                     "sampling": Interval(0.952, 0.946, 0.957),
+                     "open": Interval(0.956, 0.949, 0.961)},
+                 c3={"rules": Interval(0.919, 0.910, 0.927),
+                     "feedback": Interval(0.886, 0.874, 0.894),
+                     "sampling": Interval(0.904, 0.896, 0.913),
+                     "open": Interval(0.905, 0.895, 0.914)})
+    assert verdict_sentence(s, n_excerpts=6, n_seeds=5) == (
+        "On 6 excerpts x 5 seeds, rules, sampling and open beat feedback on class-3 share; "
+        "rules, sampling and open do not separate on Helmholtz share (feedback behind rules "
+        "and open).")
 
 
 def test_verdict_without_any_separation_and_with_ties():

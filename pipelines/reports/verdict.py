@@ -65,7 +65,8 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
     method's; a group of methods that do not separate from one another beats the rest when
     each of them separates from each of the rest ("sampling and sampling-open beat rules
     and feedback"); otherwise the methods not separated from the best are named as not
-    separating.
+    separating, and each method left out is named behind those of them it separates from
+    ("(feedback behind rules)").
 
     Parameters
     ----------
@@ -96,9 +97,13 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
     >>> print(textwrap.fill(verdict_sentence(s, n_excerpts=4, n_seeds=5), 80))
     On 4 excerpts x 5 seeds, rules and sampling beat feedback on Helmholtz share;
     rules and feedback do not separate on attack p90.
+    >>> s["helmholtz_share"]["sampling"] = Interval(0.85, 0.75, 0.9)
+    >>> print(textwrap.fill(verdict_sentence(s, n_excerpts=4, n_seeds=5), 80))
+    On 4 excerpts x 5 seeds, rules and sampling do not separate on Helmholtz share
+    (feedback behind rules); rules and feedback do not separate on attack p90.
     """
     wins: dict[tuple[tuple[str, ...], tuple[str, ...]], list[str]] = {}
-    ties: dict[tuple[str, ...], list[str]] = {}
+    ties: dict[tuple[tuple[str, ...], tuple[tuple[str, tuple[str, ...]], ...]], list[str]] = {}
     for fig in headline:
         per = {m: iv for m, iv in summary.get(fig, {}).items() if np.isfinite(iv.mean)}
         if len(per) < 2:
@@ -109,13 +114,19 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
         if rest and all(better(per[a], per[b], figures[fig]) for a in top for b in rest):
             wins.setdefault((tuple(m for m in per if m in top), rest), []).append(LABELS[fig])
         else:
-            ties.setdefault(tuple(m for m in per if m in top), []).append(LABELS[fig])
+            behind = tuple((b, tuple(a for a in per if a in top
+                                     and better(per[a], per[b], figures[fig])))
+                           for b in rest)
+            ties.setdefault((tuple(m for m in per if m in top), behind),
+                            []).append(LABELS[fig])
     clauses = []
     for (top, others), figs in wins.items():
         verb = "beats" if len(top) == 1 else "beat"
         clauses.append(f"{_join(top)} {verb} {_join(others)} on {_join(figs)}")
-    for who, figs in ties.items():
-        clauses.append(f"{_join(who)} do not separate on {_join(figs)}")
+    for (who, behind), figs in ties.items():
+        trail = "; ".join(f"{b} behind {_join(a)}" for b, a in behind if a)
+        clauses.append(f"{_join(who)} do not separate on {_join(figs)}"
+                       + (f" ({trail})" if trail else ""))
     plural = "s" if n_seeds != 1 else ""
     head = f"On {n_excerpts} excerpt{'s' if n_excerpts != 1 else ''} x {n_seeds} seed{plural}"
     if n_databases > 1:
