@@ -53,6 +53,33 @@ def _join(words: Sequence[str]) -> str:
     return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
 
 
+def _standings(summary: Mapping[str, Mapping[str, Interval]], figures: Mapping[str, bool | None],
+               headline: Sequence[str]) -> tuple[dict, dict]:
+    """Per headline figure: who beats whom, or who does not separate and who trails them.
+
+    Returns ``wins``: (top methods, the rest) -> figure labels, and ``ties``: (methods not
+    separated from the best, ((method left out, those of them it trails), ...)) -> labels.
+    """
+    wins: dict[tuple[tuple[str, ...], tuple[str, ...]], list[str]] = {}
+    ties: dict[tuple[tuple[str, ...], tuple[tuple[str, tuple[str, ...]], ...]], list[str]] = {}
+    for fig in headline:
+        per = {m: iv for m, iv in summary.get(fig, {}).items() if np.isfinite(iv.mean)}
+        if len(per) < 2:
+            continue
+        w = winner(per, figures[fig])
+        top = [w] if w is not None else contenders(per, figures[fig])
+        rest = tuple(m for m in per if m not in top)
+        if rest and all(better(per[a], per[b], figures[fig]) for a in top for b in rest):
+            wins.setdefault((tuple(m for m in per if m in top), rest), []).append(LABELS[fig])
+        else:
+            behind = tuple((b, tuple(a for a in per if a in top
+                                     and better(per[a], per[b], figures[fig])))
+                           for b in rest)
+            ties.setdefault((tuple(m for m in per if m in top), behind),
+                            []).append(LABELS[fig])
+    return wins, ties
+
+
 def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpts: int,
                      n_seeds: int, figures: Mapping[str, bool | None] = FIGURES,
                      headline: Sequence[str] = ("helmholtz_share", "attack_ms_p90",
@@ -102,23 +129,7 @@ def verdict_sentence(summary: Mapping[str, Mapping[str, Interval]], *, n_excerpt
     On 4 excerpts x 5 seeds, rules and sampling do not separate on Helmholtz share
     (feedback behind rules); rules and feedback do not separate on attack p90.
     """
-    wins: dict[tuple[tuple[str, ...], tuple[str, ...]], list[str]] = {}
-    ties: dict[tuple[tuple[str, ...], tuple[tuple[str, tuple[str, ...]], ...]], list[str]] = {}
-    for fig in headline:
-        per = {m: iv for m, iv in summary.get(fig, {}).items() if np.isfinite(iv.mean)}
-        if len(per) < 2:
-            continue
-        w = winner(per, figures[fig])
-        top = [w] if w is not None else contenders(per, figures[fig])
-        rest = tuple(m for m in per if m not in top)
-        if rest and all(better(per[a], per[b], figures[fig]) for a in top for b in rest):
-            wins.setdefault((tuple(m for m in per if m in top), rest), []).append(LABELS[fig])
-        else:
-            behind = tuple((b, tuple(a for a in per if a in top
-                                     and better(per[a], per[b], figures[fig])))
-                           for b in rest)
-            ties.setdefault((tuple(m for m in per if m in top), behind),
-                            []).append(LABELS[fig])
+    wins, ties = _standings(summary, figures, headline)
     clauses = []
     for (top, others), figs in wins.items():
         verb = "beats" if len(top) == 1 else "beat"
