@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 
+import pytest
 from _listening import PAIR, TINY
 
 from data_schemas.labels import read_labels, write_labels
@@ -61,3 +62,23 @@ def test_empty_labels_table_is_an_error(models_dir, tmp_path, capsys):
                  "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and f"{path}: the labels table has no rows" in err
+
+
+def test_a_pair_trained_at_another_bow_lane_is_stale(models_dir, tmp_path):
+    """The rules' lanes moved (the thirty-fourth session's p lane: beta 0.14 -> 0.135): a
+    rerun of `arco train` trains the pair again instead of keeping clips played elsewhere."""
+    key = _copy_models(models_dir, tmp_path / "models")
+    meta = json.loads((tmp_path / "models" / f"{key}.json").read_text())
+    lane = (meta["velocity"], meta["beta"])
+    assert is_complete(tmp_path / "models", key, "auto", lane)
+    assert not is_complete(tmp_path / "models", key, "auto", (lane[0], lane[1] * 0.96))
+    assert not is_complete(tmp_path / "models", key, "auto", (lane[0] * 0.96, lane[1]))
+    kept = train_instrument("violin", tmp_path / "models", pairs=[PAIR], settings=TINY,
+                            workers=1, progress=False, lanes={PAIR[1]: lane})
+    assert kept == []
+    moved = (lane[0] * 0.96, lane[1] * 0.96)
+    done = train_instrument("violin", tmp_path / "models", pairs=[PAIR], settings=TINY,
+                            workers=1, progress=False, lanes={PAIR[1]: moved})
+    assert [r["key"] for r in done] == [key]
+    meta = json.loads((tmp_path / "models" / f"{key}.json").read_text())
+    assert (meta["velocity"], meta["beta"]) == pytest.approx(moved, rel=1e-12)

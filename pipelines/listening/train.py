@@ -39,12 +39,15 @@ def pair_seed(seed: int, string: int, dynamic: str) -> int:
     return seed * 1009 + string * 17 + DYNAMICS.index(dynamic)
 
 
-def is_complete(out_dir: str | os.PathLike, key: str, labels_sha256: str | None = None) -> bool:
+def is_complete(out_dir: str | os.PathLike, key: str, labels_sha256: str | None = None,
+                lane: tuple[float, float] | None = None) -> bool:
     """Whether a pair finished training in this model format (its JSON says ``complete``).
 
     A pair of an older format (the pickled ``.joblib`` models) is not complete: a rerun
     trains it again in the current format. With ``labels_sha256`` (see
-    :func:`labels_digest`) a pair trained from other labels is not complete either.
+    :func:`labels_digest`) a pair trained from other labels is not complete either, nor,
+    with ``lane`` (bow velocity m/s, beta), one trained at another bow lane (its JSON's
+    ``velocity`` and ``beta``): the rules' lanes moved, so its clips were played elsewhere.
     """
     import json
 
@@ -52,7 +55,10 @@ def is_complete(out_dir: str | os.PathLike, key: str, labels_sha256: str | None 
     try:
         meta = json.loads(path.read_text("utf-8"))
         done = bool(meta.get("complete")) and meta.get("format") == MODEL_FORMAT
-    except (OSError, ValueError, AttributeError):
+        if done and lane is not None:
+            done = bool(np.allclose([meta["velocity"], meta["beta"]], lane, rtol=1e-9,
+                                    atol=0.0))
+    except (OSError, ValueError, AttributeError, KeyError, TypeError):
         return False
     if not done or labels_sha256 is None:
         return done
@@ -254,7 +260,8 @@ def train_instrument(instrument: str, out_dir: str | os.PathLike, *, teacher: st
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temps(out, recursive=True)
     todo = [(s, d) for s, d in pairs if not is_complete(
-        out, pair_key(instrument, s, d), labels_digest(teacher, labels, instrument, s, d))]
+        out, pair_key(instrument, s, d), labels_digest(teacher, labels, instrument, s, d),
+        tuple(lanes[d]))]
     kwargs = {"teacher": teacher, "labels": labels,
               "labels_base": str(Path(labels_path).parent) if labels_path else ".",
               "settings": settings, "seed": seed}
