@@ -36,9 +36,8 @@ from pipelines.perform.events import Performance
 from pipelines.perform.rules import fermata_warp, perform_part
 from synth.listening.controller import ControllerSettings, HopPlan, PerformanceLog
 from synth.listening.features import HOP
+from synth.listening.training_settings import LANE_LEVELS
 
-#: Dynamic level (0..9, p = 3 .. f = 6) of each trained lane.
-LANE_LEVELS = {"p": 3, "mp": 4, "mf": 5, "f": 6}
 TAIL = 1.0  # s of ring-out after the last hop
 #: The control law of ``--method feedback``: a trim of the rules' force within 1/1.5..1.5
 #: that moves only while one side ("too little" / "too much") holds 85 % of the averaged

@@ -5,13 +5,26 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from data_schemas.instruments import dynamics_table
 from synth.listening.classifier import FINGERS
 from synth.listening.clips import Clip
 from synth.listening.controller_settings import ControllerSettings
 from synth.listening.teacher import TeacherThresholds
 
-#: Vivi's bow lanes: dynamic -> (bow velocity m/s, beta).
-DEFAULT_LANES = {"p": (0.20, 0.14), "mp": (0.26, 0.12), "mf": (0.33, 0.10), "f": (0.40, 0.08)}
+#: Dynamic level (0 = pppp .. 9 = ffff) of each trained dynamic.
+LANE_LEVELS = {"p": 3, "mp": 4, "mf": 5, "f": 6}
+
+
+def _bow_lanes() -> dict[str, tuple[float, float]]:
+    table = dynamics_table("bow_lanes")
+    return {d: (table.velocity[table.level.index(float(level))],
+                table.beta[table.level.index(float(level))])
+            for d, level in LANE_LEVELS.items()}
+
+
+#: The rules' bow lanes (the facts' ``[dynamics.bow_lanes]``, after Vivi) at the trained
+#: dynamics: dynamic -> (bow velocity m/s, beta).
+DEFAULT_LANES = _bow_lanes()
 
 Teacher = Callable[[Clip], int]
 

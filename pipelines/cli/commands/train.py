@@ -61,14 +61,15 @@ def run(args: argparse.Namespace) -> int:
     from pipelines.perform.config import dynamic_table, load_config
     from synth.listening.settings_file import load_listening_settings
     from synth.listening.training import QUICK, TrainingSettings
+    from synth.listening.training_settings import LANE_LEVELS
 
     output_dir(args.output)
     if args.workers is not None and args.workers < 1:
         raise ParameterError(f"--workers {args.workers} must be >= 1")
     config = load_config(args.config)
-    levels = {"p": 3, "mp": 4, "mf": 5, "f": 6}
     lanes = {d: (float(dynamic_table(config, "velocity", [lv])[0]),
-                 float(dynamic_table(config, "beta", [lv])[0])) for d, lv in levels.items()}
+                 float(dynamic_table(config, "beta", [lv])[0]))
+             for d, lv in LANE_LEVELS.items()}
     settings = QUICK if args.quick else TrainingSettings()
     if args.listening_config:
         listening = load_listening_settings(args.listening_config)
