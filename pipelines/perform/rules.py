@@ -280,7 +280,7 @@ def _articulate(events: list[Event], cols: dict[str, np.ndarray], config: dict[s
         gap = (nxt.t0 - e.end) if nxt is not None else np.inf
         e.rest_after = nxt is None or nxt.pizz or gap > 1e-3 or \
             e.run_position in ("end", "iso")
-        bow_change = nxt is not None and not nxt.cont and not nxt.pizz \
+        bow_change = nxt is not None and not nxt.cont \
             and not bool(cols["tremolo"][e.rows].any())
         e.lighten = (not e.pizz) and (e.rest_after or set(nxt.strings) != set(e.strings)
                                       or bow_change) \

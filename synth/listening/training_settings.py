@@ -17,9 +17,8 @@ LANE_LEVELS = {"p": 3, "mp": 4, "mf": 5, "f": 6}
 
 def _bow_lanes() -> dict[str, tuple[float, float]]:
     table = dynamics_table("bow_lanes")
-    return {d: (table.velocity[table.level.index(float(level))],
-                table.beta[table.level.index(float(level))])
-            for d, level in LANE_LEVELS.items()}
+    rows = {d: table.level.index(float(level)) for d, level in LANE_LEVELS.items()}
+    return {d: (table.velocity[k], table.beta[k]) for d, k in rows.items()}
 
 
 #: The rules' bow lanes (the facts' ``[dynamics.bow_lanes]``, after Vivi) at the trained
