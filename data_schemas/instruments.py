@@ -138,17 +138,38 @@ class DynamicsTable:
     beta: tuple[float, ...]
 
     def at(self, dynamic: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Velocity (m/s), force and beta at dynamic levels ``dynamic`` (linear in level)."""
+        """Velocity (m/s), force (N) and beta at dynamic levels ``dynamic`` (linear in level).
+
+        The force is NaN for a table without forces (``bow_lanes``: the rules' forces are
+        per instrument and string, in ``pipelines/perform/rules.toml``).
+
+        Examples
+        --------
+        >>> v, f, b = dynamics_table("bow_lanes").at(5.0)
+        >>> float(v), math.isnan(float(f)), float(b)
+        (0.33, True, 0.1)
+        """
         import numpy as np
         d = np.asarray(dynamic, dtype=float)
         level = np.asarray(self.level)
-        return (np.interp(d, level, np.asarray(self.velocity)),
-                np.interp(d, level, np.asarray(self.force)),
+        force = (np.interp(d, level, np.asarray(self.force)) if self.force
+                 else np.full(d.shape, np.nan))
+        return (np.interp(d, level, np.asarray(self.velocity)), force,
                 np.interp(d, level, np.asarray(self.beta)))
 
     def level_of_force(self, force: float | np.ndarray) -> np.ndarray:
-        """Inverse of the force column: the dynamic level a force is typical of."""
+        """Inverse of the force column: the dynamic level a force (N) is typical of.
+
+        Raises
+        ------
+        SchemaError
+            The table has no forces (``bow_lanes``).
+        """
         import numpy as np
+        if not self.force:
+            raise SchemaError(f"{_path()}: [dynamics.{self.name}] has no forces: the rules' "
+                              f"forces are per instrument and string ([bow_force.<instrument>] "
+                              f"in pipelines/perform/rules.toml)")
         return np.interp(force, np.asarray(self.force), np.asarray(self.level))
 
 

@@ -108,3 +108,13 @@ def test_simulate_recordings_cli_takes_a_performers_config(tmp_path):
     assert args.func(args) == 0
     ann = read_annotation(tmp_path / "rec" / "solo_take000.annotation.parquet")
     assert set(ann["performer"]) == {"solo"} and len(ann) == 20
+
+
+def test_bow_lanes_have_no_forces_and_say_so():
+    """The rules' lanes carry velocity and beta only: their force reads NaN, and asking which
+    level a force is typical of names the table instead of failing inside numpy."""
+    v, f, b = dynamics_table("bow_lanes").at(np.array([3.0, 5.0]))
+    assert np.allclose(v, [0.1929, 0.33]) and np.allclose(b, [0.135, 0.10])
+    assert np.isnan(f).all() and f.shape == (2,)
+    with pytest.raises(SchemaError, match=r"bow_lanes.*no forces"):
+        dynamics_table("bow_lanes").level_of_force(0.5)
