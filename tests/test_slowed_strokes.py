@@ -33,6 +33,7 @@ def _event(level: float) -> Event:
 def test_the_floor_keeps_slowed_strokes_off_the_bridge(level, scale, floor):
     config = copy.deepcopy(CFG)
     config["bow"]["slowed_min_beta"] = floor
+    config["bow"]["node_guard"] = []  # the floor alone (the nodes: test_node_guard.py)
     t = np.array([0.5])
     lane = float(dynamic_table(config, "beta", np.array([level]))[0])
     beta = float(note_beta(_event(level), t, config, scale)[0])

@@ -25,11 +25,11 @@ from pipelines.perform.config import bow_force, dynamic_table
 from pipelines.perform.events import Event
 from pipelines.perform.expression import string_cents
 from pipelines.perform.note_shape import (
+    contact_factor,
     dynamic_at,
     note_beta,
     note_force,
     pressing_cap,
-    slowing_floor,
 )
 from pipelines.perform.ornaments import ornament_cents
 
@@ -341,11 +341,12 @@ def _note_forces(e: Event, t: np.ndarray, speed: np.ndarray, beta: np.ndarray, s
     The bow catches each string the stroke starts on or crosses to (not one already sounding
     in a slur, nor under grace or ornament notes: a light bow); out of a bow change from a
     softer note the force rises from that note's level (``rise_from``); a slowed stroke kept
-    off the bridge keeps its force at the window's middle (F ~ beta^-1.5); no string but a
+    off the bridge or a contact point moved off a node keeps its force at the window's middle
+    (F ~ beta^-1.5); no string but a
     harmonic's is pressed past its pressing limit (:func:`note_shape.pressing_cap`).
     """
     plain = e.ornament is None and not e.grace
-    lighter = slowing_floor(e, t, config, s.beta_scale) ** -1.5
+    lighter = contact_factor(e, t, config, s.beta_scale) ** -1.5
     out = {}
     for string in {*e.strings, *(r[0] for r in e.roll)}:
         force = note_force(e, t, config, s.force_scale, instrument, string,

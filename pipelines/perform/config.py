@@ -212,6 +212,7 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
     if not _is_number(margin) or not 0 <= margin < 0.5:
         raise ParameterError(f"{source}: bow.margin={margin!r} must be in [0, 0.5)")
     check_instrument_names(config["bow"]["pressing_limit"], "bow.pressing_limit", source)
+    _validate_node_guard(config["bow"], source)
     for key in config["articulations"]:
         _positive(config, "articulations", key, source)
     for key in config["techniques"]:
@@ -231,6 +232,19 @@ def validate_config(config: dict[str, Any], source: str = "<config>") -> None:
     for key in ("pitch_sigma", "onset_sigma"):
         _numbers(config["skill"][key], f"skill.{key} (levels 0..3)", 4, ">= 0",
                  _upper("skill", key), source)
+
+
+def _validate_node_guard(bow: dict[str, Any], source: str) -> None:
+    """``[bow] node_guard`` (whole mode numbers from 2 to 20) and ``node_width`` (0..0.5)."""
+    nodes = bow["node_guard"]
+    if not isinstance(nodes, list) or not all(
+            isinstance(n, int) and not isinstance(n, bool) and 2 <= n <= 20 for n in nodes):
+        raise ParameterError(f"{source}: bow.node_guard={nodes!r} must be a list of whole "
+                             "mode numbers from 2 to 20")
+    width = bow["node_width"]
+    if not _is_number(width) or not 0 <= width < 0.5:
+        raise ParameterError(f"{source}: bow.node_width={width!r} must be in [0, 0.5) (mode "
+                             "numbers: neighbouring zones may not overlap)")
 
 
 def _validate_bow_force(config: dict[str, Any], source: str) -> None:

@@ -168,10 +168,69 @@ def slowing_floor(e: Event, t: np.ndarray, config: dict[str, Any],
     return np.maximum(1.0, floor / (lane * scale))
 
 
+def off_nodes(beta: np.ndarray, nodes: list[int], width: float) -> np.ndarray:
+    """Contact points moved off the string's low nodes.
+
+    A ``beta`` with ``|1 / beta - n| < width`` for a mode number ``n`` in ``nodes`` moves to
+    the nearer edge of that zone (``1 / beta = n -+ width``); others are returned unchanged.
+
+    Parameters
+    ----------
+    beta : np.ndarray
+        Bow-bridge distance / string length.
+    nodes : list of int
+        Mode numbers whose nodes (beta = 1/n) the bow avoids.
+    width : float
+        Half-width of each zone in mode numbers (< 0.5: zones do not overlap).
+
+    Returns
+    -------
+    np.ndarray
+        ``beta``'s shape.
+
+    Examples
+    --------
+    >>> off_nodes(np.array([0.17, 0.165, 0.155, 0.185]), [5, 6, 7], 0.25).round(4).tolist()
+    [0.1739, 0.16, 0.155, 0.185]
+    """
+    beta = np.asarray(beta, np.float64)
+    inv = 1.0 / beta
+    moved = np.zeros(inv.shape, bool)
+    for n in nodes:
+        inside = np.abs(inv - n) < width
+        inv = np.where(inside, np.where(inv < n, n - width, n + width), inv)
+        moved |= inside
+    return np.where(moved, 1.0 / inv, beta)
+
+
+def contact_factor(e: Event, t: np.ndarray, config: dict[str, Any],
+                   scale: float = 1.0) -> np.ndarray:
+    """Factor on a stroke's lane beta (times ``scale``) for where the bow actually plays.
+
+    The slowed stroke's floor (:func:`slowing_floor`) and, for a note that is not a
+    harmonic, the move off the strings' low nodes (``[bow] node_guard``, ``node_width``;
+    :func:`off_nodes`). A note's force follows the window's middle there (F ~ beta^-1.5).
+
+    Examples
+    --------
+    >>> from pipelines.perform.config import load_config
+    >>> e = Event(t0=0.0, end=1.0, strings=[1], semitones=[0.0], rows=[0], label="D4",
+    ...           dynamic=5.0)
+    >>> float(contact_factor(e, np.array([0.5]), load_config())[0])  # mf lane 0.1: no node
+    1.0
+    """
+    lane = dynamic_table(config, "beta", dynamic_at(e, t)) * scale
+    floored = lane * slowing_floor(e, t, config, scale)
+    if e.node:
+        return floored / lane
+    bow = config["bow"]
+    return off_nodes(floored, bow["node_guard"], bow["node_width"]) / lane
+
+
 def note_beta(e: Event, t: np.ndarray, config: dict[str, Any], scale: float = 1.0) -> np.ndarray:
     """Contact point beta (bow-bridge distance / string length) of ``e`` at times ``t`` (s)."""
     beta = dynamic_table(config, "beta", dynamic_at(e, t)) * scale
-    beta = beta * slowing_floor(e, t, config, scale)
+    beta = beta * contact_factor(e, t, config, scale)
     if e.technique == "sul_ponticello":
         beta = beta * config["techniques"]["sul_ponticello_beta"]
     elif e.technique == "sul_tasto":
