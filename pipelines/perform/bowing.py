@@ -342,8 +342,8 @@ def _note_forces(e: Event, t: np.ndarray, speed: np.ndarray, beta: np.ndarray, s
     in a slur, nor under grace or ornament notes: a light bow); out of a bow change from a
     softer note the force rises from that note's level (``rise_from``); a slowed stroke kept
     off the bridge or a contact point moved off a node keeps its force at the window's middle
-    (F ~ beta^-1.5); no string but a
-    harmonic's is pressed past its pressing limit (:func:`note_shape.pressing_cap`).
+    (F ~ beta^-1.5, :func:`note_shape.contact_factor`); no string but a harmonic's is
+    pressed past its pressing limit (:func:`note_shape.pressing_cap`).
     """
     plain = e.ornament is None and not e.grace
     lighter = contact_factor(e, t, config, s.beta_scale) ** -1.5
